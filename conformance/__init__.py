@@ -1,0 +1,1 @@
+"""Clause registry and conformance runner (see the conformance issue)."""

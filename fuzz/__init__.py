@@ -1,0 +1,1 @@
+"""Property-based and frame-level fuzzing (see the fuzzing issue)."""

@@ -1,0 +1,3 @@
+"""The `mavconform` command line: one front door to the vehicle, the GCS and the suites."""
+
+__version__ = "0.1.0"

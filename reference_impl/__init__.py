@@ -1,0 +1,1 @@
+"""What speaks the protocol: wire codec, network (simulated and UDP), sans-IO engines, nodes."""

@@ -1,0 +1,96 @@
+"""A MAVLink endpoint inside a node: codec, peer table, outbox.
+
+Both reference nodes (vehicle and GCS) own one. It turns datagrams into frames, remembers
+which address each (system, component) last spoke from (seed 001, routing: a system learns
+the link of a peer from the messages it sees), and turns `Send` actions into datagrams for
+the right addresses. Bad bytes are counted and kept for the report, never raised.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from typing import Any, Callable, Iterable
+
+from .mission.actions import Peer, Send
+from .net.node import Address
+from .wire.codec import FrameDecoder, FrameEncoder
+from .wire.frame import DecodeError, Frame, SignatureVerdict
+from .wire.signing import SigningKey
+
+MAX_KEPT_ERRORS = 100
+
+
+class MavlinkEndpoint:
+    def __init__(self, system: int, component: int, *, dialect: Any = None, version: int = 2,
+                 signing: SigningKey | None = None, require_signature: bool = False,
+                 wall_clock: Callable[[], float] = time.time) -> None:
+        self.encoder = FrameEncoder(system, component, dialect=dialect, version=version,
+                                    signing=signing, wall_clock=wall_clock)
+        self.decoder = FrameDecoder(dialect=dialect, signing=signing, wall_clock=wall_clock)
+        self.require_signature = require_signature
+        self.peers: dict[Peer, Address] = {}
+        self.addresses: dict[Address, None] = {}   # insertion-ordered set: broadcast targets
+        self.decode_errors: deque[tuple[Address, DecodeError]] = deque(maxlen=MAX_KEPT_ERRORS)
+        self.rejected_signatures = 0
+        self._outbox: list[tuple[bytes, Address]] = []
+
+    @property
+    def system(self) -> int:
+        return self.encoder.system
+
+    @property
+    def component(self) -> int:
+        return self.encoder.component
+
+    def add_address(self, address: Address) -> None:
+        """A place to send to before anyone has spoken (the target of `udp:HOST:PORT`)."""
+        self.addresses.setdefault(address, None)
+
+    def receive(self, data: bytes, source: Address) -> list[Frame]:
+        """Frames in a datagram that passed the signature policy; errors are recorded."""
+        self.addresses.setdefault(source, None)
+        frames: list[Frame] = []
+        for item in self.decoder.feed(data):
+            if isinstance(item, DecodeError):
+                self.decode_errors.append((source, item))
+                continue
+            if not self._signature_acceptable(item):
+                self.rejected_signatures += 1
+                continue
+            self.peers[(item.src_system, item.src_component)] = source
+            frames.append(item)
+        return frames
+
+    def _signature_acceptable(self, frame: Frame) -> bool:
+        verdict = frame.signature
+        if verdict is SignatureVerdict.INVALID:
+            return False
+        return not (self.require_signature and verdict is not SignatureVerdict.VALID)
+
+    def send(self, msg: Any, to: Peer | None = None) -> None:
+        """Queue `msg` for one peer (by its last address) or, with `to=None`, every address."""
+        data = self.encoder.encode(msg)
+        if to is not None:
+            address = self.peers.get(to)
+            if address is None and to[1] == 0:
+                address = next((a for p, a in self.peers.items() if p[0] == to[0]), None)
+            if address is not None:
+                self._outbox.append((data, address))
+                return
+        for address in self.addresses:
+            self._outbox.append((data, address))
+
+    def send_all(self, actions: Iterable[Any]) -> list[Any]:
+        """Send every `Send` in `actions`; return the other actions (e.g. results)."""
+        rest = []
+        for action in actions:
+            if isinstance(action, Send):
+                self.send(action.msg, action.to)
+            else:
+                rest.append(action)
+        return rest
+
+    def take_outgoing(self) -> list[tuple[bytes, Address]]:
+        out, self._outbox = self._outbox, []
+        return out

@@ -1,0 +1,55 @@
+"""Mission files: QGroundControl .plan JSON and QGC WPL 110 text, read into and written from `Plan`.
+
+Every problem, from a missing file to a bad field, is a one-line `PlanFileError` (a
+`UsageError`) that starts with the path as given, so the CLI can print it as is.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from reference_impl.files.plan import Plan, PlanFileError, plan_from_items
+from reference_impl.files.qgc_plan import format_qgc_plan, parse_qgc_plan
+from reference_impl.files.wpl import HEADER as WPL_HEADER, format_wpl, looks_like_wpl, parse_wpl
+
+__all__ = ["Plan", "PlanFileError", "load_plan", "save_plan", "plan_from_items", "SAMPLES_DIR"]
+
+SAMPLES_DIR = Path(__file__).parent / "samples"
+PLAN_SUFFIX = ".plan"
+WPL_SUFFIXES = (".waypoints", ".txt", ".mission")
+
+
+def load_plan(path: str | Path) -> Plan:
+    """A .plan file as QGC JSON; any other file as WPL 110 text if its first line says so."""
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")  # -sig: editors on Windows add a BOM
+    except UnicodeDecodeError as error:
+        raise PlanFileError(f"{source}: cannot read: not UTF-8 text ({error.reason})") from None
+    except OSError as error:
+        raise PlanFileError(f"{source}: cannot read: {error.strerror or error}") from None
+    if Path(path).suffix.lower() == PLAN_SUFFIX:
+        return parse_qgc_plan(text, source)
+    first_line = text.splitlines()[0] if text else ""
+    if looks_like_wpl(first_line):
+        return parse_wpl(text, source)
+    raise PlanFileError(f"{source}:1: not a mission file: expected a .plan file or the header "
+                        f"{WPL_HEADER!r}, found {first_line.strip()[:40]!r}")
+
+
+def save_plan(plan: Plan, path: str | Path) -> None:
+    """.plan as QGC JSON; .waypoints/.txt/.mission as WPL 110 (mission only: a fence or
+    rally that would be dropped is refused instead)."""
+    source = str(path)
+    suffix = Path(path).suffix.lower()
+    if suffix == PLAN_SUFFIX:
+        text = format_qgc_plan(plan, source)
+    elif suffix in WPL_SUFFIXES:
+        text = format_wpl(plan, source)
+    else:
+        raise PlanFileError(f"{source}: unknown mission file type {suffix or '(no extension)'!r}; "
+                            f"use {PLAN_SUFFIX} or one of {', '.join(WPL_SUFFIXES)}")
+    try:
+        Path(path).write_text(text, encoding="utf-8")
+    except OSError as error:
+        raise PlanFileError(f"{source}: cannot write: {error.strerror or error}") from None

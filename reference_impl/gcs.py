@@ -1,0 +1,142 @@
+"""The reference GCS: heartbeat, target discovery, mission client, one node.
+
+A `DatagramNode` like the vehicle. The target vehicle is either given or discovered from
+the first HEARTBEAT of an autopilot (not another GCS). Operations are started with the
+time (`upload(..., now)`); results collect in `results` in the order they finish.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+from .endpoint import MavlinkEndpoint
+from .mission.actions import Finished, Peer
+from .mission.client import MissionClient
+from .mission.items import MissionItem, MissionType
+from .mission.results import OperationResult
+from .mission.timing import Timings
+from .net.node import Address
+from .wire.dialect import mavlink as _d
+from .wire.signing import SigningKey
+
+MAV_TYPE_GCS = 6
+MAV_AUTOPILOT_INVALID = 8
+MAV_COMP_ID_MISSIONPLANNER = 190
+HEARTBEAT_PERIOD = 1.0
+
+
+@dataclass(frozen=True)
+class GcsConfig:
+    system: int = 255
+    component: int = MAV_COMP_ID_MISSIONPLANNER
+    target: Peer | None = None          # None: the first autopilot whose HEARTBEAT we hear
+    timings: Timings = Timings()
+    upload_int: bool = True
+    download_int: bool = True
+    mavlink_version: int = 2
+    signing: SigningKey | None = None
+
+
+class GcsNode:
+    def __init__(self, config: GcsConfig | None = None, *, remote: Address | None = None,
+                 wall_clock: Callable[[], float] = time.time) -> None:
+        self.config = cfg = config or GcsConfig()
+        self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
+                                        signing=cfg.signing, wall_clock=wall_clock)
+        if remote is not None:
+            self.endpoint.add_address(remote)
+        self.target: Peer | None = cfg.target
+        self.target_heartbeat: Any = None
+        self.client: MissionClient | None = None
+        self.results: list[OperationResult] = []
+        self.received: list[Any] = []   # every frame from the target outside the client's business
+        self._next_heartbeat: float | None = 0.0
+        if self.target is not None:
+            self._make_client()
+
+    # --- operations -----------------------------------------------------------------------
+    @property
+    def connected(self) -> bool:
+        return self.client is not None
+
+    def upload(self, mission_type: MissionType, items: Sequence[MissionItem], now: float) -> None:
+        self._run(self._require_client().upload(mission_type, items, now))
+
+    def download(self, mission_type: MissionType, now: float) -> None:
+        self._run(self._require_client().download(mission_type, now))
+
+    def clear(self, mission_type: MissionType, now: float) -> None:
+        self._run(self._require_client().clear(mission_type, now))
+
+    def set_current(self, seq: int, now: float, *, via_command: bool = False) -> None:
+        self._run(self._require_client().set_current(seq, now, via_command=via_command))
+
+    def cancel(self, now: float) -> None:
+        if self.client is not None:
+            self._run(self.client.cancel(now))
+
+    def send(self, msg: Any) -> None:
+        """Send any message to the target (for commands outside the mission protocol)."""
+        self.endpoint.send(msg, self.target)
+
+    @property
+    def busy(self) -> bool:
+        return self.client is not None and self.client.busy
+
+    # --- DatagramNode ---------------------------------------------------------------------
+    def datagram_received(self, data: bytes, source: Address, now: float) -> None:
+        for frame in self.endpoint.receive(data, source):
+            if self.target is None:
+                self._maybe_discover(frame)
+                continue
+            if frame.source != self.target and not (
+                    self.target[1] == 0 and frame.src_system == self.target[0]):
+                continue
+            if frame.name == "HEARTBEAT":
+                self.target_heartbeat = frame.msg
+            if self.client is not None:
+                self._run(self.client.handle(frame, now))
+            if len(self.received) < 10_000:
+                self.received.append(frame.msg)
+
+    def poll(self, now: float) -> None:
+        if self.client is not None:
+            self._run(self.client.poll(now))
+        if self._next_heartbeat is not None and now >= self._next_heartbeat:
+            self._next_heartbeat = now + HEARTBEAT_PERIOD
+            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3))
+
+    def next_deadline(self) -> float | None:
+        client = self.client.next_deadline() if self.client is not None else None
+        if client is None:
+            return self._next_heartbeat
+        return min(client, self._next_heartbeat) if self._next_heartbeat is not None else client
+
+    def take_outgoing(self) -> list[tuple[bytes, Address]]:
+        return self.endpoint.take_outgoing()
+
+    # --- internals ------------------------------------------------------------------------
+    def _maybe_discover(self, frame: Any) -> None:
+        msg = frame.msg
+        if frame.name == "HEARTBEAT" and msg.type != MAV_TYPE_GCS and msg.autopilot != MAV_AUTOPILOT_INVALID:
+            self.target = frame.source
+            self.target_heartbeat = msg
+            self._make_client()
+
+    def _make_client(self) -> None:
+        cfg = self.config
+        self.client = MissionClient(cfg.system, cfg.component, self.target, cfg.timings,
+                                    upload_int=cfg.upload_int, download_int=cfg.download_int)
+
+    def _require_client(self) -> MissionClient:
+        if self.client is None:
+            from .errors import LocalProtocolError
+            raise LocalProtocolError("no target vehicle yet: wait for its HEARTBEAT first")
+        return self.client
+
+    def _run(self, actions: list[Any]) -> None:
+        for action in self.endpoint.send_all(actions):
+            if isinstance(action, Finished):
+                self.results.append(action.result)

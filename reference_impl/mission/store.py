@@ -1,0 +1,75 @@
+"""The vehicle's stored plans: one per mission type, each replaced whole.
+
+Stored separately and independently by type (seed 000, "Mission Types"). `commit` is the
+only way a plan changes, so an upload that fails can never leave a mix of old and new
+(seed 000: "A new mission should be fully uploaded and accepted before the old mission is
+replaced"); a profile that models a non-atomic autopilot writes through `write_partial`.
+Each commit produces a new `opaque_id` (upstream MISSION_ACK.opaque_id: it "must change
+when there is any change to the on-vehicle plan type").
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from typing import Iterable, Sequence
+
+from .items import PLAN_TYPES, MissionItem, MissionType
+
+_ITEM = struct.Struct("<HBHffffiifBBB")
+
+
+def plan_digest(items: Sequence[MissionItem]) -> int:
+    """CRC32 over the items' canonical bytes: equal plans, equal digest."""
+    crc = 0
+    for it in items:
+        crc = zlib.crc32(_ITEM.pack(
+            it.seq, it.frame, it.command, it.param1, it.param2, it.param3, it.param4,
+            it.x, it.y, it.z, it.current, it.autocontinue, int(it.mission_type)), crc)
+    return crc
+
+
+class MissionStore:
+    def __init__(self) -> None:
+        self._plans: dict[MissionType, tuple[MissionItem, ...]] = {t: () for t in PLAN_TYPES}
+        self._ids: dict[MissionType, int] = {t: 0 for t in PLAN_TYPES}
+
+    def items(self, mission_type: MissionType) -> tuple[MissionItem, ...]:
+        return self._plans[mission_type]
+
+    def count(self, mission_type: MissionType) -> int:
+        return len(self._plans[mission_type])
+
+    def opaque_id(self, mission_type: MissionType) -> int:
+        """Id of the stored plan; 0 when none is stored (upstream: 0 = no plan loaded)."""
+        return self._ids[mission_type]
+
+    def commit(self, mission_type: MissionType, items: Iterable[MissionItem]) -> int:
+        """Replace the plan whole; returns its new opaque id."""
+        plan = tuple(items)
+        self._plans[mission_type] = plan
+        if not plan:
+            self._ids[mission_type] = 0
+            return 0
+        new_id = plan_digest(plan) or 1
+        self._ids[mission_type] = new_id
+        return new_id
+
+    def clear(self, mission_type: MissionType) -> None:
+        self.commit(mission_type, ())
+
+    def write_partial(self, mission_type: MissionType, seq: int, item: MissionItem) -> None:
+        """Overwrite or append one item in place (for non-atomic profiles only)."""
+        plan = list(self._plans[mission_type])
+        if seq < len(plan):
+            plan[seq] = item
+        else:
+            plan.append(item)
+        self.commit(mission_type, plan)
+
+    def truncate(self, mission_type: MissionType, count: int) -> None:
+        """Cut the stored plan to `count` items (non-atomic profiles only)."""
+        self.commit(mission_type, self._plans[mission_type][:count])
+
+    def snapshot(self) -> dict[MissionType, tuple[MissionItem, ...]]:
+        return dict(self._plans)

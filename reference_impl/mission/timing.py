@@ -1,0 +1,33 @@
+"""Timeouts and retry limits of the Mission Protocol.
+
+Defaults are the spec's recommendation (seed 000, "Timeouts and Retries"): 1500 ms for a
+response in general, 250 ms for mission items, at most 5 retries. Profiles override them
+as data (PX4 and ArduPilot use other values: VARIANTS.md P3, A5).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+
+@dataclass(frozen=True)
+class Timings:
+    default_timeout: float = 1.5   # s: wait for a response to COUNT, REQUEST_LIST, CLEAR_ALL, ...
+    item_timeout: float = 0.25     # s: vehicle's wait for the item it requested
+    max_retries: int = 5           # resends of one message before the operation is given up
+
+    def __post_init__(self) -> None:
+        if self.default_timeout <= 0 or self.item_timeout <= 0:
+            raise ValueError("timeouts must be positive")
+        if self.max_retries < 0:
+            raise ValueError("max_retries must be >= 0")
+
+    def scaled(self, factor: float) -> "Timings":
+        """Every deadline stretched by `factor` (slow links); retry counts unchanged."""
+        return replace(self, default_timeout=self.default_timeout * factor,
+                       item_timeout=self.item_timeout * factor)
+
+    @property
+    def give_up_after(self) -> float:
+        """How long a silent peer keeps an item transfer alive on the vehicle."""
+        return self.item_timeout * (self.max_retries + 1)

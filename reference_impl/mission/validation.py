@@ -1,0 +1,100 @@
+"""What the reference vehicle accepts in an uploaded item, as a table of rules.
+
+The spec lets a vehicle refuse an item with a MISSION_ACK error that names the defect
+(MAV_MISSION_UNSUPPORTED, _UNSUPPORTED_FRAME, _INVALID_PARAMn, ...), which cancels the
+upload and leaves the old plan in place. The rules are data so a profile can swap them
+and a report can print them; the first rule an item breaks decides the code.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from .constants import (
+    FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
+)
+from .items import FRAME_MISSION, GLOBAL_FRAMES, MissionItem, MissionType
+
+COMMANDS_BY_TYPE = {
+    MissionType.MISSION: MISSION_COMMANDS,
+    MissionType.FENCE: FENCE_COMMANDS,
+    MissionType.RALLY: RALLY_COMMANDS,
+}
+_PARAM_CODES = {
+    1: MissionResult.INVALID_PARAM1, 2: MissionResult.INVALID_PARAM2,
+    3: MissionResult.INVALID_PARAM3, 4: MissionResult.INVALID_PARAM4,
+}
+
+
+@dataclass(frozen=True)
+class ItemRule:
+    """One acceptance rule: items it `applies` to must satisfy `holds`, else `code`."""
+
+    name: str
+    code: MissionResult
+    applies: Callable[[MissionItem], bool]
+    holds: Callable[[MissionItem], bool]
+
+
+def _not_inf(v: float) -> bool:
+    return not math.isinf(v)  # NaN means "use the default" (upstream MISSION_ITEM text)
+
+
+def _count_ok(v: float) -> bool:
+    return math.isfinite(v) and v >= 3 and v == int(v)
+
+
+def _param(n: int) -> Callable[[MissionItem], float]:
+    return lambda it: getattr(it, f"param{n}")
+
+
+def _positional(it: MissionItem) -> bool:
+    return it.command in POSITIONAL_COMMANDS or it.mission_type != MissionType.MISSION
+
+
+SPEC_RULES: tuple[ItemRule, ...] = (
+    ItemRule("command known for its mission type", MissionResult.UNSUPPORTED,
+             lambda it: True, lambda it: it.command in COMMANDS_BY_TYPE[it.mission_type]),
+    ItemRule("frame known", MissionResult.UNSUPPORTED_FRAME,
+             lambda it: True, lambda it: it.frame in GLOBAL_FRAMES or it.frame == FRAME_MISSION),
+    ItemRule("positions use a global frame", MissionResult.UNSUPPORTED_FRAME,
+             _positional, lambda it: it.frame in GLOBAL_FRAMES),
+    ItemRule("current and autocontinue are 0 or 1", MissionResult.INVALID,
+             lambda it: True, lambda it: it.current in (0, 1) and it.autocontinue in (0, 1)),
+    *(ItemRule(f"param{n} is not infinite", _PARAM_CODES[n],
+               lambda it: True, (lambda n: lambda it: _not_inf(_param(n)(it)))(n))
+      for n in (1, 2, 3, 4)),
+    ItemRule("latitude within +-90 deg", MissionResult.INVALID_PARAM5_X,
+             lambda it: it.frame in GLOBAL_FRAMES, lambda it: -900_000_000 <= it.x <= 900_000_000),
+    ItemRule("longitude within +-180 deg", MissionResult.INVALID_PARAM6_Y,
+             lambda it: it.frame in GLOBAL_FRAMES,
+             lambda it: -1_800_000_000 <= it.y <= 1_800_000_000),
+    ItemRule("altitude finite", MissionResult.INVALID_PARAM7,
+             _positional, lambda it: math.isfinite(it.z)),
+    ItemRule("waypoint hold time >= 0", MissionResult.INVALID_PARAM1,
+             lambda it: it.command == Cmd.NAV_WAYPOINT,
+             lambda it: math.isnan(it.param1) or it.param1 >= 0),
+    ItemRule("fence polygon vertex count is an integer >= 3", MissionResult.INVALID_PARAM1,
+             lambda it: it.command in (Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION,
+                                       Cmd.NAV_FENCE_POLYGON_VERTEX_EXCLUSION),
+             lambda it: _count_ok(it.param1)),
+    ItemRule("fence circle radius > 0", MissionResult.INVALID_PARAM1,
+             lambda it: it.command in (Cmd.NAV_FENCE_CIRCLE_INCLUSION, Cmd.NAV_FENCE_CIRCLE_EXCLUSION),
+             lambda it: math.isfinite(it.param1) and it.param1 > 0),
+    ItemRule("jump target is a whole seq >= 0", MissionResult.INVALID_PARAM1,
+             lambda it: it.command == Cmd.DO_JUMP,
+             lambda it: math.isfinite(it.param1) and it.param1 >= 0 and it.param1 == int(it.param1)),
+    ItemRule("jump repeat count >= -1", MissionResult.INVALID_PARAM2,
+             lambda it: it.command == Cmd.DO_JUMP,
+             lambda it: math.isfinite(it.param2) and it.param2 >= -1),
+)
+
+
+def first_defect(item: MissionItem, rules: tuple[ItemRule, ...] = SPEC_RULES) -> ItemRule | None:
+    """The first rule `item` breaks, or None if the vehicle accepts it."""
+    for rule in rules:
+        if rule.applies(item) and not rule.holds(item):
+            return rule
+    return None

@@ -1,0 +1,247 @@
+"""UdpDriver: the same `DatagramNode`s over real UDP sockets, one thread, `selectors`.
+
+The only real wait in the project lives here: `selector.select(timeout)`, always bounded by
+the run's end and the earliest node deadline or fault timer, so a silent peer costs exactly
+the timeout and never a hang. Fault models apply per node: `outgoing` to what the node
+sends, `incoming` to what it receives; delays go on the driver's own timer heap (no sleep).
+Socket errors (ICMP port unreachable surfacing as ConnectionRefusedError, a full buffer)
+are what a bad peer or link does, so they are counted, never raised. A bind failure is the
+user's mistake (bad address, port in use): a one-line `UsageError`.
+
+Fault RNGs are seeded from (seed, node index, direction), not the OS-chosen port, so the
+fault *decisions* repeat for a given seed even though real timing does not.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import random
+import selectors
+import socket
+from heapq import heappop, heappush
+from itertools import count
+from typing import Callable
+
+from ..errors import UsageError
+from .clock import Clock, MonotonicClock
+from .faults import FaultModel, LinkStats
+from .node import Address, DatagramNode
+from .sim import CaptureHook, CaptureRecord, stable_seed
+
+MAX_DATAGRAM = 65535
+MAX_DRAIN = 256  # datagrams read from one socket per wake-up, so one flood can't starve the rest
+_SEND, _RECV = 0, 1
+
+
+class _Endpoint:
+    __slots__ = ("node", "sock", "address", "outgoing", "incoming", "rng_out", "rng_in")
+
+    def __init__(self, node: DatagramNode, sock: socket.socket, address: tuple[str, int],
+                 outgoing: FaultModel | None, incoming: FaultModel | None,
+                 rng_out: random.Random, rng_in: random.Random) -> None:
+        self.node, self.sock, self.address = node, sock, address
+        self.outgoing, self.incoming = outgoing, incoming
+        self.rng_out, self.rng_in = rng_out, rng_in
+
+
+class UdpDriver:
+    """Runs nodes on UDP sockets in real time. Use as a context manager, or call close()."""
+
+    def __init__(self, clock: Clock | None = None, seed: int = 0) -> None:
+        self.clock: Clock = clock if clock is not None else MonotonicClock()
+        self.seed = seed
+        self.stats: dict[tuple[Address, Address], LinkStats] = {}
+        self.recv_errors = 0
+        self._selector = selectors.DefaultSelector()
+        self._endpoints: list[_Endpoint] = []
+        self._timers: list[tuple[float, int, int, _Endpoint, bytes, Address]] = []
+        self._tiebreak = count()
+        self._hooks: list[CaptureHook] = []
+        self._closed = False
+
+    # -- wiring -------------------------------------------------------------------------
+
+    def add_node(self, node: DatagramNode, *, bind: tuple[str, int] = ("127.0.0.1", 0),
+                 outgoing: FaultModel | None = None,
+                 incoming: FaultModel | None = None) -> tuple[str, int]:
+        """Bind a socket for `node` and return the bound (host, port)."""
+        self._check_open()
+        host, port = bind
+        sock = socket.socket(_family(host), socket.SOCK_DGRAM)
+        try:
+            sock.bind((host, port))
+        except (OSError, OverflowError) as exc:
+            sock.close()
+            reason = getattr(exc, "strerror", None) or str(exc)
+            raise UsageError(f"cannot bind UDP {host}:{port}: {reason}") from None
+        sock.setblocking(False)
+        address = tuple(sock.getsockname()[:2])
+        if incoming is not None and incoming is outgoing:
+            incoming = outgoing.copy()  # rule counters belong to one direction
+        index = len(self._endpoints)
+        ep = _Endpoint(node, sock, address, outgoing, incoming,
+                       random.Random(stable_seed(self.seed, index, "out")),
+                       random.Random(stable_seed(self.seed, index, "in")))
+        self._endpoints.append(ep)
+        self._selector.register(sock, selectors.EVENT_READ, ep)
+        return address  # type: ignore[return-value]
+
+    def add_capture(self, hook: CaptureHook) -> None:
+        self._hooks.append(hook)
+
+    # -- running ------------------------------------------------------------------------
+
+    def run_for(self, seconds: float) -> None:
+        self.run_until(lambda: False, timeout=seconds)
+
+    def run_until(self, condition: Callable[[], bool], *, timeout: float,
+                  max_steps: int = 10_000_000) -> bool:
+        """Serve sockets and timers until `condition()` holds or `timeout` real seconds
+        pass. Never blocks past the end or the earliest node deadline / fault timer."""
+        self._check_open()
+        if not timeout >= 0.0:
+            raise ValueError(f"run_until timeout must be >= 0 seconds, got {timeout!r}")
+        clock = self.clock
+        now = clock.now()
+        end = now + timeout
+        self._flush(now)
+        if condition():
+            return True
+        timers = self._timers
+        endpoints = self._endpoints
+        for _ in range(max_steps):
+            now = clock.now()
+            busy = False
+            while timers and timers[0][0] <= now:
+                _, _, kind, ep, data, peer = heappop(timers)
+                if kind == _SEND:
+                    self._sendto(ep, data, peer)
+                else:
+                    self._deliver(ep, data, peer, now)
+                busy = True
+            for ep in endpoints:
+                d = ep.node.next_deadline()
+                if d is not None and d <= now:
+                    ep.node.poll(now)
+                    busy = True
+            if busy:
+                self._flush(now)
+                if condition():
+                    return True
+            now = clock.now()
+            wake = end
+            if timers and timers[0][0] < wake:
+                wake = timers[0][0]
+            for ep in endpoints:
+                d = ep.node.next_deadline()
+                if d is not None and d < wake:
+                    wake = d
+            events = self._selector.select(max(0.0, wake - now))
+            if events:
+                now = clock.now()
+                for key, _ in events:
+                    self._drain(key.data, now)
+                self._flush(now)
+                if condition():
+                    return True
+            if clock.now() >= end:  # after one select, so timeout=0 still drains the sockets
+                break
+        return condition()
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        for ep in self._endpoints:
+            self._selector.unregister(ep.sock)
+            ep.sock.close()
+        self._selector.close()
+
+    def __enter__(self) -> "UdpDriver":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- internals ----------------------------------------------------------------------
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise ValueError("UdpDriver is closed")
+
+    def _link(self, src: Address, dst: Address) -> LinkStats:
+        stats = self.stats.get((src, dst))
+        if stats is None:
+            stats = self.stats[(src, dst)] = LinkStats()
+        return stats
+
+    def _emit(self, now: float, src: Address, dst: Address, data: bytes, kind: str) -> None:
+        rec = CaptureRecord(now, src, dst, data, kind)
+        for hook in self._hooks:
+            hook(rec)
+
+    def _flush(self, now: float) -> None:
+        """Send what every node has queued, through its outgoing faults."""
+        for ep in self._endpoints:
+            for data, dst in ep.node.take_outgoing():
+                stats = self._link(ep.address, dst)
+                stats.sent += 1
+                if self._hooks:
+                    self._emit(now, ep.address, dst, data, "tx")
+                fault = ep.outgoing
+                if fault is None or fault.is_clean:
+                    self._sendto(ep, data, dst)
+                    continue
+                copies = fault.schedule(data, now, ep.rng_out, stats)
+                if not copies and self._hooks:
+                    self._emit(now, ep.address, dst, data, "drop")
+                for delay, payload in copies:
+                    if delay <= 0.0:
+                        self._sendto(ep, payload, dst)
+                    else:
+                        heappush(self._timers,
+                                 (now + delay, next(self._tiebreak), _SEND, ep, payload, dst))
+
+    def _sendto(self, ep: _Endpoint, data: bytes, dst: Address) -> None:
+        try:
+            ep.sock.sendto(data, dst)  # type: ignore[arg-type]
+        except OSError:
+            self._link(ep.address, dst).errors += 1
+
+    def _drain(self, ep: _Endpoint, now: float) -> None:
+        """Read what is waiting on one socket (bounded) and pass it through incoming faults."""
+        for _ in range(MAX_DRAIN):
+            try:
+                data, addr = ep.sock.recvfrom(MAX_DATAGRAM)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:  # e.g. a queued ICMP error from an earlier send
+                self.recv_errors += 1
+                continue
+            src = (addr[0], addr[1])
+            fault = ep.incoming
+            if fault is None or fault.is_clean:
+                self._deliver(ep, data, src, now)
+                continue
+            copies = fault.schedule(data, now, ep.rng_in, self._link(src, ep.address))
+            if not copies and self._hooks:
+                self._emit(now, src, ep.address, data, "drop")
+            for delay, payload in copies:
+                if delay <= 0.0:
+                    self._deliver(ep, payload, src, now)
+                else:
+                    heappush(self._timers,
+                             (now + delay, next(self._tiebreak), _RECV, ep, payload, src))
+
+    def _deliver(self, ep: _Endpoint, data: bytes, src: Address, now: float) -> None:
+        self._link(src, ep.address).delivered += 1
+        if self._hooks:
+            self._emit(now, src, ep.address, data, "rx")
+        ep.node.datagram_received(data, src, now)
+
+
+def _family(host: str) -> socket.AddressFamily:
+    try:
+        return socket.AF_INET6 if ipaddress.ip_address(host).version == 6 else socket.AF_INET
+    except ValueError:
+        return socket.AF_INET  # a host name: resolved by bind, IPv4

@@ -1,0 +1,83 @@
+"""Blocking calls over a sans-IO GCS node: start an operation, run the driver to its result.
+
+Works with either driver (`SimNetwork` in virtual time, `UdpDriver` in real time): both
+offer `clock` and `run_until(condition, timeout=...)`. Every wait is bounded: the engine
+ends every operation by itself, and the bound here only guards against an engine bug.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Protocol, Sequence
+
+from .errors import LocalProtocolError
+from .gcs import GcsNode
+from .mission.items import PLAN_TYPES, MissionItem, MissionType
+from .mission.results import Operation, OperationResult
+
+
+class Driver(Protocol):
+    clock: Any
+
+    def run_until(self, condition: Callable[[], bool], *, timeout: float) -> bool: ...
+
+
+class TargetUnresponsive(Exception):
+    """The target never sent a HEARTBEAT: a finding about the target, not a usage error."""
+
+
+class GcsSession:
+    def __init__(self, driver: Driver, gcs: GcsNode) -> None:
+        self.driver = driver
+        self.gcs = gcs
+
+    @property
+    def now(self) -> float:
+        return self.driver.clock.now()
+
+    def wait_for_target(self, timeout: float = 5.0) -> tuple[int, int]:
+        if not self.driver.run_until(lambda: self.gcs.connected, timeout=timeout):
+            raise TargetUnresponsive(f"no HEARTBEAT from the target within {timeout:g} s")
+        return self.gcs.target
+
+    def upload(self, mission_type: MissionType, items: Sequence[MissionItem]) -> OperationResult:
+        n = len(items)
+        return self._run(lambda now: self.gcs.upload(mission_type, items, now), messages=n + 2)
+
+    def download(self, mission_type: MissionType) -> OperationResult:
+        # The count is unknown until the vehicle says; the bound grows as items arrive.
+        return self._run(lambda now: self.gcs.download(mission_type, now), messages=None)
+
+    def clear(self, mission_type: MissionType) -> OperationResult:
+        return self._run(lambda now: self.gcs.clear(mission_type, now), messages=1)
+
+    def set_current(self, seq: int, *, via_command: bool = False) -> OperationResult:
+        return self._run(lambda now: self.gcs.set_current(seq, now, via_command=via_command), messages=1)
+
+    def upload_all(self, plans: dict[MissionType, Sequence[MissionItem]]) -> list[OperationResult]:
+        return [self.upload(t, plans[t]) for t in PLAN_TYPES if t in plans]
+
+    def download_all(self) -> list[OperationResult]:
+        return [self.download(t) for t in PLAN_TYPES]
+
+    def _run(self, start: Callable[[float], None], *, messages: int | None) -> OperationResult:
+        gcs = self.gcs
+        if not gcs.connected:
+            raise LocalProtocolError("no target vehicle yet: call wait_for_target() first")
+        done = len(gcs.results)
+        start(self.now)
+        timings = gcs.config.timings
+        per_message = timings.default_timeout * (timings.max_retries + 2)
+        while True:
+            # A download's bound follows its count; everything else is fixed at the start.
+            n = messages if messages is not None else _download_size(gcs) + 2
+            finished = self.driver.run_until(lambda: len(gcs.results) > done,
+                                             timeout=per_message * max(n, 2))
+            if finished:
+                return gcs.results[done]
+            if messages is not None or _download_size(gcs) + 2 <= n:
+                raise LocalProtocolError("mission client did not finish within its own bound (engine bug)")
+
+
+def _download_size(gcs: GcsNode) -> int:
+    op = getattr(gcs.client, "_op", None)
+    return op.count if op is not None and op.operation is Operation.DOWNLOAD else 0

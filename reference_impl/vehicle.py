@@ -1,0 +1,133 @@
+"""The reference vehicle: heartbeat, mission server, simulated flight, one node.
+
+A `DatagramNode`, so the same object runs under `SimNetwork` (virtual time) or the UDP
+driver (real time). Any number of GCSs may talk to it; each is learned from its traffic.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from .endpoint import MavlinkEndpoint
+from .flight import FlightSim, Position
+from .mission import messages as m
+from .mission.actions import Send
+from .mission.behaviour import ServerBehaviour
+from .mission.constants import Cmd, CommandResult
+from .mission.server import MissionServer
+from .net.node import Address
+from .wire.dialect import mavlink as _d
+from .wire.signing import SigningKey
+
+MAV_TYPE_QUADROTOR = 2
+MAV_AUTOPILOT_GENERIC_MISSION_FULL = 4
+MAV_STATE_STANDBY, MAV_STATE_ACTIVE = 3, 4
+MODE_FLAG_AUTO = 4 | 1  # MAV_MODE_FLAG_AUTO_ENABLED | CUSTOM_MODE_ENABLED
+HEARTBEAT_PERIOD = 1.0
+POSITION_PERIOD = 1.0
+
+
+@dataclass(frozen=True)
+class VehicleConfig:
+    system: int = 1
+    component: int = 1
+    behaviour: ServerBehaviour = ServerBehaviour()
+    home: Position = Position(47.397742, 8.545594, 0.0)
+    speed: float = 10.0              # m/s ground speed of the simulated flight
+    autostart: bool = False          # start flying as soon as a mission is accepted
+    mavlink_version: int = 2
+    signing: SigningKey | None = None
+    require_signature: bool = False
+
+
+class VehicleNode:
+    """Reference vehicle as a sans-IO datagram node."""
+
+    def __init__(self, config: VehicleConfig | None = None, *,
+                 wall_clock: Callable[[], float] = time.time) -> None:
+        self.config = cfg = config or VehicleConfig()
+        self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
+                                        signing=cfg.signing, require_signature=cfg.require_signature,
+                                        wall_clock=wall_clock)
+        self.server = MissionServer(cfg.system, cfg.component, cfg.behaviour)
+        self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed)
+        self.frames_received = 0
+        self._next_heartbeat: float | None = 0.0
+        self._next_position: float | None = 0.0
+
+    @property
+    def store(self):
+        return self.server.store
+
+    # --- DatagramNode ---------------------------------------------------------------------
+    def datagram_received(self, data: bytes, source: Address, now: float) -> None:
+        for frame in self.endpoint.receive(data, source):
+            self.frames_received += 1
+            msg = frame.msg
+            name = msg.get_type()
+            if self.server.handles(name):
+                seq_before, plan_before = self.server.progress.seq, self.server.store.opaque_id(0)
+                self._send(self.server.handle(frame, now))
+                if self.server.store.opaque_id(0) != plan_before:
+                    self._plan_changed(now)
+                elif self.server.progress.seq != seq_before:
+                    self.flight.retarget(now)
+            elif name in ("COMMAND_LONG", "COMMAND_INT"):
+                self._on_command(msg, frame.source, now)
+
+    def poll(self, now: float) -> None:
+        self._send(self.server.poll(now))
+        self._send(self.flight.poll(now))
+        if self._next_heartbeat is not None and now >= self._next_heartbeat:
+            self._next_heartbeat = now + HEARTBEAT_PERIOD
+            self.endpoint.send(self._heartbeat())
+        if self._next_position is not None and now >= self._next_position:
+            self._next_position = now + POSITION_PERIOD
+            self.endpoint.send(self._position(now))
+
+    def next_deadline(self) -> float | None:
+        times = [t for t in (self.server.next_deadline(), self.flight.next_deadline(),
+                             self._next_heartbeat, self._next_position) if t is not None]
+        return min(times) if times else None
+
+    def take_outgoing(self) -> list[tuple[bytes, Address]]:
+        return self.endpoint.take_outgoing()
+
+    # --- internals ------------------------------------------------------------------------
+    def _send(self, actions: list[Send]) -> None:
+        for action in actions:
+            self.endpoint.send(action.msg, action.to)
+
+    def _plan_changed(self, now: float) -> None:
+        if self.config.autostart and self.server.store.count(0):
+            self._send(self.flight.start(now))
+        else:
+            self.flight.retarget(now)
+
+    def _on_command(self, msg: Any, source: tuple[int, int], now: float) -> None:
+        if msg.target_system not in (0, self.config.system) or msg.target_component not in (0, self.config.component):
+            return
+        if msg.command == Cmd.DO_SET_MISSION_CURRENT:
+            self._send(self.server.command_set_current(msg.param1, source, now))
+            self.flight.retarget(now)
+        elif msg.command == Cmd.MISSION_START:
+            started = self.flight.start(now)
+            result = CommandResult.ACCEPTED if started else CommandResult.FAILED
+            self.endpoint.send(m.command_ack_message(msg.command, result, source), source)
+            self._send(started)
+        else:
+            self.endpoint.send(m.command_ack_message(msg.command, CommandResult.UNSUPPORTED, source), source)
+
+    def _heartbeat(self) -> Any:
+        flying = self.flight.flying
+        return _d.MAVLink_heartbeat_message(
+            MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_GENERIC_MISSION_FULL, MODE_FLAG_AUTO if flying else 1, 0,
+            MAV_STATE_ACTIVE if flying else MAV_STATE_STANDBY, 3)
+
+    def _position(self, now: float) -> Any:
+        p = self.flight.where(now)
+        return _d.MAVLink_global_position_int_message(
+            int(now * 1000) & 0xFFFFFFFF, round(p.lat * 1e7), round(p.lon * 1e7),
+            round(p.alt * 1000), round((p.alt - self.config.home.alt) * 1000), 0, 0, 0, 0xFFFF)

@@ -1,0 +1,231 @@
+"""Frame codec: MAVLink 1/2 framing and MAVLink 2 signing over a pymavlink dialect.
+
+pymavlink does the payload layout, CRC_EXTRA and the signature arithmetic. This module adds
+what a test tool needs on top of it:
+- datagram splitting that never raises: garbage, truncation, bad CRC, bad length and
+  unknown incompat flags each come back as a `DecodeError` value, and are counted;
+- a signature *verdict* per frame instead of a silent drop, so the layer above decides
+  what an unsigned or badly signed frame means (handover gating needs to see them);
+- a bad signature never moves the stream's timestamp (pymavlink records it before it
+  compares signatures, which would let a forged frame lock out the real sender);
+- time from an injected wall clock, so signed traffic is deterministic in virtual time.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable, Iterable
+
+from .frame import DecodeError, Frame, SignatureVerdict
+from .signing import SigningKey, signing_timestamp
+
+MAGIC_V1 = 0xFE
+MAGIC_V2 = 0xFD
+IFLAG_SIGNED = 0x01
+V1_OVERHEAD = 8          # magic, len, seq, sys, comp, msgid + 2 CRC
+V2_OVERHEAD = 12         # magic, len, iflags, cflags, seq, sys, comp, msgid*3 + 2 CRC
+SIGNATURE_LEN = 13
+
+WallClock = Callable[[], float]
+
+
+def default_dialect() -> Any:
+    """The project's own generated dialect module."""
+    from .dialect import mavlink
+
+    return mavlink
+
+
+class FrameEncoder:
+    """Encodes messages as one sender (system, component), with its own sequence counter."""
+
+    def __init__(
+        self,
+        system: int,
+        component: int,
+        *,
+        dialect: Any = None,
+        version: int = 2,
+        signing: SigningKey | None = None,
+        wall_clock: WallClock = time.time,
+    ) -> None:
+        if version not in (1, 2):
+            raise ValueError(f"MAVLink version must be 1 or 2, got {version}")
+        self.dialect = dialect or default_dialect()
+        self.version = version
+        self._wall_clock = wall_clock
+        self._mav = self.dialect.MAVLink(None, system, component)
+        self.frames_sent = 0
+        self.set_signing(signing)
+
+    @property
+    def system(self) -> int:
+        return self._mav.srcSystem
+
+    @property
+    def component(self) -> int:
+        return self._mav.srcComponent
+
+    def set_signing(self, key: SigningKey | None) -> None:
+        sig = self._mav.signing
+        if key is None:
+            sig.secret_key, sig.sign_outgoing = None, False
+            return
+        sig.secret_key, sig.link_id, sig.sign_outgoing = key.secret, key.link_id, True
+
+    def encode(self, msg: Any, *, version: int | None = None) -> bytes:
+        """The frame bytes for `msg`; advances this sender's sequence number."""
+        version = version or self.version
+        mav = self._mav
+        if version == 1:
+            if msg.id > 255:
+                raise ValueError(f"{msg.get_type()} (id {msg.id}) cannot be sent as MAVLink 1")
+            if mav.signing.sign_outgoing:
+                raise ValueError("MAVLink 1 frames cannot be signed")
+        elif mav.signing.sign_outgoing:
+            now = signing_timestamp(self._wall_clock())
+            if now > mav.signing.timestamp:
+                mav.signing.timestamp = now
+        data = msg.pack(mav, force_mavlink1=(version == 1))
+        mav.seq = (mav.seq + 1) & 0xFF
+        self.frames_sent += 1
+        return bytes(data)
+
+
+class FrameDecoder:
+    """Splits datagrams into frames and decodes them; bad bytes become `DecodeError`s."""
+
+    def __init__(
+        self,
+        *,
+        dialect: Any = None,
+        signing: SigningKey | None = None,
+        wall_clock: WallClock = time.time,
+    ) -> None:
+        self.dialect = dialect or default_dialect()
+        self._wall_clock = wall_clock
+        self._mav = self.dialect.MAVLink(None, 0, 0)
+        self._plain = self._mav  # the keyless decoder, used while signing is off
+        self.frames = 0
+        self.errors = 0
+        self.bad_signatures = 0
+        self.set_signing(signing)
+
+    def set_signing(self, key: SigningKey | None) -> None:
+        if key is None:
+            self._mav = self._plain
+            return
+        self._mav = self.dialect.MAVLink(None, 0, 0)
+        self._mav.signing.secret_key = key.secret
+        # Accept everything at pymavlink's level; the verdict is ours to give.
+        self._mav.signing.allow_unsigned_callback = _accept_all
+
+    @property
+    def signing_enabled(self) -> bool:
+        return self._mav.signing.secret_key is not None
+
+    def feed(self, data: bytes) -> list[Frame | DecodeError]:
+        """Every frame and every error in one datagram, in order."""
+        out: list[Frame | DecodeError] = []
+        n = len(data)
+        i = 0
+        garbage_start = -1
+        while i < n:
+            magic = data[i]
+            if magic != MAGIC_V2 and magic != MAGIC_V1:
+                if garbage_start < 0:
+                    garbage_start = i
+                i += 1
+                continue
+            if garbage_start >= 0:
+                out.append(self._error("bytes outside any frame", data[garbage_start:i]))
+                garbage_start = -1
+            if i + 1 >= n:
+                out.append(self._error("truncated frame header", data[i:]))
+                break
+            plen = data[i + 1]
+            if magic == MAGIC_V2:
+                if i + 2 >= n:
+                    out.append(self._error("truncated frame header", data[i:]))
+                    break
+                iflags = data[i + 2]
+                total = plen + V2_OVERHEAD + (SIGNATURE_LEN if iflags & IFLAG_SIGNED else 0)
+            else:
+                iflags = 0
+                total = plen + V1_OVERHEAD
+            if i + total > n:
+                out.append(self._error(
+                    f"truncated frame: header says {total} bytes, {n - i} remain", data[i:]))
+                break
+            chunk = data[i:i + total]
+            if iflags & ~IFLAG_SIGNED:
+                out.append(self._error(f"unknown incompat_flags 0x{iflags:02x}", chunk))
+            else:
+                out.append(self._decode_one(chunk, iflags))
+            i += total
+        if garbage_start >= 0:
+            out.append(self._error("bytes outside any frame", data[garbage_start:]))
+        return out
+
+    def _decode_one(self, chunk: bytes, iflags: int) -> Frame | DecodeError:
+        mav = self._mav
+        signed = bool(iflags & IFLAG_SIGNED)
+        stream_key = saved_ts = None
+        if signed and mav.signing.secret_key is not None:
+            # (link_id, sys, comp): pymavlink's per-link timestamp key.
+            stream_key = (chunk[-13], chunk[5], chunk[6])
+            saved_ts = mav.signing.stream_timestamps.get(stream_key)
+            now = signing_timestamp(self._wall_clock())
+            if now > mav.signing.timestamp:
+                mav.signing.timestamp = now
+        try:
+            msg = mav.decode(bytearray(chunk))
+        except Exception as exc:  # pymavlink raises MAVError, struct.error, ValueError...
+            return self._error(_reason(exc), chunk)
+        if msg.get_type() == "UNKNOWN" or msg.get_type().startswith("UNKNOWN_"):
+            return self._error(f"unknown message id {msg.get_msgId()}", chunk)
+        if not signed:
+            verdict = SignatureVerdict.UNSIGNED
+        elif stream_key is None:
+            verdict = SignatureVerdict.UNCHECKED
+        elif msg._signed:
+            verdict = SignatureVerdict.VALID
+        else:
+            verdict = SignatureVerdict.INVALID
+            self.bad_signatures += 1
+            if saved_ts is None:
+                mav.signing.stream_timestamps.pop(stream_key, None)
+            else:
+                mav.signing.stream_timestamps[stream_key] = saved_ts
+        h = msg._header
+        self.frames += 1
+        return Frame(
+            msg=msg,
+            msgid=h.msgId,
+            src_system=h.srcSystem,
+            src_component=h.srcComponent,
+            seq=h.seq,
+            version=1 if chunk[0] == MAGIC_V1 else 2,
+            incompat_flags=h.incompat_flags,
+            compat_flags=h.compat_flags,
+            raw=chunk,
+            signature=verdict,
+            link_id=chunk[-13] if signed else None,
+        )
+
+    def _error(self, reason: str, raw: bytes) -> DecodeError:
+        self.errors += 1
+        return DecodeError(reason, bytes(raw))
+
+
+def _accept_all(_mav: Any, _msgid: int) -> bool:
+    return True
+
+
+def _reason(exc: Exception) -> str:
+    text = getattr(exc, "message", None) or str(exc) or type(exc).__name__
+    return text.splitlines()[0][:200]
+
+
+def frames_only(items: Iterable[Frame | DecodeError]) -> list[Frame]:
+    return [f for f in items if isinstance(f, Frame)]

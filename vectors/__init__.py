@@ -1,0 +1,1 @@
+"""Golden packet vectors (see the vectors work)."""
