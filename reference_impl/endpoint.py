@@ -49,16 +49,19 @@ class MavlinkEndpoint:
 
     def receive(self, data: bytes, source: Address) -> list[Frame]:
         """Frames in a datagram that passed the signature policy; errors are recorded."""
-        self.addresses.setdefault(source, None)
+        if source not in self.addresses:
+            self.addresses[source] = None
         frames: list[Frame] = []
+        peers = self.peers
         for item in self.decoder.feed(data):
-            if isinstance(item, DecodeError):
+            if item.__class__ is DecodeError:
                 self.decode_errors.append((source, item))
                 continue
-            if not self._signature_acceptable(item):
+            if (item.signature is not SignatureVerdict.UNSIGNED or self.require_signature) \
+                    and not self._signature_acceptable(item):
                 self.rejected_signatures += 1
                 continue
-            self.peers[(item.src_system, item.src_component)] = source
+            peers[(item.src_system, item.src_component)] = source
             frames.append(item)
         return frames
 

@@ -16,6 +16,7 @@ from .mission import messages as m
 from .mission.actions import Send
 from .mission.behaviour import ServerBehaviour
 from .mission.constants import Cmd, CommandResult
+from .mission.items import PLAN_TYPES
 from .mission.server import MissionServer
 from .net.node import Address
 from .wire.dialect import mavlink as _d
@@ -54,6 +55,9 @@ class VehicleNode:
         self.server = MissionServer(cfg.system, cfg.component, cfg.behaviour)
         self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed)
         self.frames_received = 0
+        self.events: list[str] = []   # human-readable log of plan changes, for the CLI
+        self._seen = self._plan_state()
+        self._seen_quick = (self.server.store.version, 0, 0)
         self._next_heartbeat: float | None = 0.0
         self._next_position: float | None = 0.0
 
@@ -76,9 +80,11 @@ class VehicleNode:
                     self.flight.retarget(now)
             elif name in ("COMMAND_LONG", "COMMAND_INT"):
                 self._on_command(msg, frame.source, now)
+        self._note_changes()
 
     def poll(self, now: float) -> None:
         self._send(self.server.poll(now))
+        self._note_changes()
         self._send(self.flight.poll(now))
         if self._next_heartbeat is not None and now >= self._next_heartbeat:
             self._next_heartbeat = now + HEARTBEAT_PERIOD
@@ -88,14 +94,38 @@ class VehicleNode:
             self.endpoint.send(self._position(now))
 
     def next_deadline(self) -> float | None:
-        times = [t for t in (self.server.next_deadline(), self.flight.next_deadline(),
-                             self._next_heartbeat, self._next_position) if t is not None]
-        return min(times) if times else None
+        best = self._next_heartbeat
+        for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline()):
+            if t is not None and (best is None or t < best):
+                best = t
+        return best
 
     def take_outgoing(self) -> list[tuple[bytes, Address]]:
         return self.endpoint.take_outgoing()
 
     # --- internals ------------------------------------------------------------------------
+    def _plan_state(self) -> tuple:
+        store, stats = self.server.store, self.server.stats
+        return (tuple((store.count(t), store.opaque_id(t)) for t in PLAN_TYPES),
+                stats.uploads_failed, stats.denied)
+
+    def _note_changes(self) -> None:
+        stats = self.server.stats
+        quick = (self.server.store.version, stats.uploads_failed, stats.denied)
+        if quick == self._seen_quick:
+            return
+        self._seen_quick = quick
+        state = self._plan_state()
+        (plans, failed, denied), (old_plans, old_failed, old_denied) = state, self._seen
+        for t, (n, oid), old in zip(PLAN_TYPES, plans, old_plans):
+            if (n, oid) != old:
+                self.events.append(f"{t.label}: {n} items stored (id 0x{oid:08x})" if n else f"{t.label}: cleared")
+        if failed > old_failed:
+            self.events.append(f"upload failed or cancelled; stored plans unchanged ({failed} so far)")
+        if denied > old_denied:
+            self.events.append(f"denied a second GCS during a transfer ({denied} so far)")
+        self._seen = state
+
     def _send(self, actions: list[Send]) -> None:
         for action in actions:
             self.endpoint.send(action.msg, action.to)

@@ -83,6 +83,7 @@ class MissionServer:
         self.stats = ServerStats()
         self._record = record_history
         self._slots = {t: _Transfer(t) for t in PLAN_TYPES}
+        self._slot_list = tuple(self._slots.values())
         self._last_accepted: dict[MissionType, _LastAccepted] = {}
         self._handlers = {
             "MISSION_COUNT": self._on_count,
@@ -125,11 +126,12 @@ class MissionServer:
         return out
 
     def next_deadline(self) -> float | None:
-        times = [s.deadline for s in self._slots.values() if s.deadline is not None]
-        p = self.progress.next_deadline()
-        if p is not None:
-            times.append(p)
-        return min(times) if times else None
+        best = self.progress.next_deadline()
+        for slot in self._slot_list:
+            d = slot.deadline
+            if d is not None and (best is None or d < best):
+                best = d
+        return best
 
     def cancel(self, mission_type: MissionType, now: float) -> list[Send]:
         """Vehicle-initiated cancel: tell the partner OPERATION_CANCELLED, go idle."""

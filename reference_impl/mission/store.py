@@ -33,6 +33,7 @@ class MissionStore:
     def __init__(self) -> None:
         self._plans: dict[MissionType, tuple[MissionItem, ...]] = {t: () for t in PLAN_TYPES}
         self._ids: dict[MissionType, int] = {t: 0 for t in PLAN_TYPES}
+        self.version = 0   # bumped on every commit: a cheap "did anything change?"
 
     def items(self, mission_type: MissionType) -> tuple[MissionItem, ...]:
         return self._plans[mission_type]
@@ -48,6 +49,7 @@ class MissionStore:
         """Replace the plan whole; returns its new opaque id."""
         plan = tuple(items)
         self._plans[mission_type] = plan
+        self.version += 1
         if not plan:
             self._ids[mission_type] = 0
             return 0

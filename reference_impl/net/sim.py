@@ -135,12 +135,16 @@ class SimNetwork:
         heap = self._heap
         nodes = self._node_list
         hooks = self._hooks
-        collect = self._collect
+        collect_from = self._collect_from
+        # A node's deadline changes only when it is stepped (given a datagram or polled), or
+        # from outside this loop (an operation started between calls): so it is read once
+        # here and re-read only for the node that was stepped.
+        deadlines = [node.next_deadline() for _, node in nodes]
+        index = {id(node): i for i, (_, node) in enumerate(nodes)}
         steps = 0
         while steps < max_steps:
             t_dead = _INF
-            for _, node in nodes:
-                d = node.next_deadline()
+            for d in deadlines:
                 if d is not None and d < t_dead:
                     t_dead = d
             t_deliv = heap[0][0] if heap else _INF
@@ -158,13 +162,18 @@ class SimNetwork:
                     rec = CaptureRecord(now, link.src, link.dst, data, "rx")
                     for hook in hooks:
                         hook(rec)
-                link.node.datagram_received(data, link.src, now)
+                node = link.node
+                node.datagram_received(data, link.src, now)
+                i = index[id(node)]
+                deadlines[i] = node.next_deadline()
+                collect_from(i, now)
             else:
-                for _, node in nodes:
-                    d = node.next_deadline()
+                for i, d in enumerate(deadlines):
                     if d is not None and d <= now:
+                        node = nodes[i][1]
                         node.poll(now)
-            collect(now)
+                        deadlines[i] = node.next_deadline()
+                        collect_from(i, now)
             if condition():
                 self.steps += steps
                 return True
@@ -178,37 +187,42 @@ class SimNetwork:
 
     def _collect(self, now: float) -> None:
         """Take every node's queued datagrams and schedule them through their links."""
+        for i in range(len(self._node_list)):
+            self._collect_from(i, now)
+
+    def _collect_from(self, i: int, now: float) -> None:
+        """Schedule node i's queued datagrams through their links."""
+        src, node = self._node_list[i]
+        out = node.take_outgoing()
+        if not out:
+            return
         links = self._links
         heap = self._heap
         tiebreak = self._tiebreak
         hooks = self._hooks
-        for src, node in self._node_list:
-            out = node.take_outgoing()
-            if not out:
-                continue
-            for data, dst in out:
-                link = links.get((src, dst))
+        for data, dst in out:
+            link = links.get((src, dst))
+            if hooks:
+                self._emit(now, src, dst, data, "tx")
+            if link is None:
+                stats = self.stats.setdefault((src, dst), LinkStats())
+                stats.sent += 1
+                stats.dropped += 1
                 if hooks:
-                    self._emit(now, src, dst, data, "tx")
-                if link is None:
-                    stats = self.stats.setdefault((src, dst), LinkStats())
-                    stats.sent += 1
-                    stats.dropped += 1
-                    if hooks:
-                        self._emit(now, src, dst, data, "drop")
-                    continue
-                link.stats.sent += 1
-                fault = link.fault
-                if fault is None or fault.is_clean:
-                    heappush(heap, (now, next(tiebreak), link, data))
-                    continue
-                copies = fault.schedule(data, now, link.rng, link.stats)
-                if not copies:
-                    if hooks:
-                        self._emit(now, src, dst, data, "drop")
-                    continue
-                for delay, payload in copies:
-                    heappush(heap, (now + delay, next(tiebreak), link, payload))
+                    self._emit(now, src, dst, data, "drop")
+                continue
+            link.stats.sent += 1
+            fault = link.fault
+            if fault is None or fault.is_clean:
+                heappush(heap, (now, next(tiebreak), link, data))
+                continue
+            copies = fault.schedule(data, now, link.rng, link.stats)
+            if not copies:
+                if hooks:
+                    self._emit(now, src, dst, data, "drop")
+                continue
+            for delay, payload in copies:
+                heappush(heap, (now + delay, next(tiebreak), link, payload))
 
     def _emit(self, now: float, src: Address, dst: Address, data: bytes, kind: str) -> None:
         rec = CaptureRecord(now, src, dst, data, kind)

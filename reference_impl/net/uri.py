@@ -35,7 +35,9 @@ class UdpUri:
         return f"{self.mode}:{host}:{self.port}"
 
 
-def parse_udp_uri(text: str) -> UdpUri:
+def parse_udp_uri(text: str, *, listen: bool = False) -> UdpUri:
+    """Parse an endpoint. With `listen=True` the URI names where *we* bind (either scheme),
+    so port 0 (any free port) is allowed."""
     def bad(what: str) -> UsageError:
         return UsageError(f"bad endpoint {text!r}: {what} ({_FORMS})")
 
@@ -68,7 +70,7 @@ def parse_udp_uri(text: str) -> UdpUri:
     port = int(port_text)
     if port > 65535:
         raise bad(f"bad port {port}: must be 0..65535")
-    if port == 0 and mode == "udp":
+    if port == 0 and mode == "udp" and not listen:
         raise bad("port 0 is only allowed for udpin (we cannot send to port 0)")
     return UdpUri(mode, host, port)
 

@@ -13,6 +13,9 @@ what a test tool needs on top of it:
 
 from __future__ import annotations
 
+import inspect
+import re
+import struct
 import time
 from typing import Any, Callable, Iterable
 
@@ -87,9 +90,22 @@ class FrameEncoder:
             if now > mav.signing.timestamp:
                 mav.signing.timestamp = now
         data = msg.pack(mav, force_mavlink1=(version == 1))
+        if version == 1:
+            data = self._without_extensions(msg, data)
         mav.seq = (mav.seq + 1) & 0xFF
         self.frames_sent += 1
-        return bytes(data)
+        return data if type(data) is bytes else bytes(data)
+
+    def _without_extensions(self, msg: Any, frame: bytes) -> bytes:
+        """MAVLink 1 carries no extension fields; pymavlink's v1 pack keeps them, so cut them
+        off and recompute the checksum (seed 001: extensions are a MAVLink 2 feature)."""
+        base = base_payload_length(type(msg))
+        if frame[1] == base:
+            return frame
+        head = bytes([MAGIC_V1, base]) + frame[2:6]
+        payload = frame[6:6 + base]
+        crc = self.dialect.x25crc(head[1:] + payload + bytes([msg.crc_extra])).crc
+        return head + payload + crc.to_bytes(2, "little")
 
 
 class FrameDecoder:
@@ -106,6 +122,7 @@ class FrameDecoder:
         self._wall_clock = wall_clock
         self._mav = self.dialect.MAVLink(None, 0, 0)
         self._plain = self._mav  # the keyless decoder, used while signing is off
+        self._unknown = self.dialect.MAVLink_unknown
         self.frames = 0
         self.errors = 0
         self.bad_signatures = 0
@@ -126,8 +143,12 @@ class FrameDecoder:
 
     def feed(self, data: bytes) -> list[Frame | DecodeError]:
         """Every frame and every error in one datagram, in order."""
-        out: list[Frame | DecodeError] = []
         n = len(data)
+        if n > 2 and data[0] == MAGIC_V2 and not data[2] & ~IFLAG_SIGNED:
+            # The usual UDP datagram: exactly one well-formed MAVLink 2 frame.
+            if data[1] + V2_OVERHEAD + (SIGNATURE_LEN if data[2] & IFLAG_SIGNED else 0) == n:
+                return [self._decode_one(data, data[2])]
+        out: list[Frame | DecodeError] = []
         i = 0
         garbage_start = -1
         while i < n:
@@ -182,8 +203,10 @@ class FrameDecoder:
             msg = mav.decode(bytearray(chunk))
         except Exception as exc:  # pymavlink raises MAVError, struct.error, ValueError...
             return self._error(_reason(exc), chunk)
-        if msg.get_type() == "UNKNOWN" or msg.get_type().startswith("UNKNOWN_"):
-            return self._error(f"unknown message id {msg.get_msgId()}", chunk)
+        if isinstance(msg, self._unknown):
+            # pymavlink's MAVLink_unknown carries id -2 in its header; read the id off the wire.
+            msgid = chunk[5] if chunk[0] == MAGIC_V1 else chunk[7] | chunk[8] << 8 | chunk[9] << 16
+            return self._error(f"unknown message id {msgid}", chunk)
         if not signed:
             verdict = SignatureVerdict.UNSIGNED
         elif stream_key is None:
@@ -197,25 +220,32 @@ class FrameDecoder:
                 mav.signing.stream_timestamps.pop(stream_key, None)
             else:
                 mav.signing.stream_timestamps[stream_key] = saved_ts
-        h = msg._header
         self.frames += 1
-        return Frame(
-            msg=msg,
-            msgid=h.msgId,
-            src_system=h.srcSystem,
-            src_component=h.srcComponent,
-            seq=h.seq,
-            version=1 if chunk[0] == MAGIC_V1 else 2,
-            incompat_flags=h.incompat_flags,
-            compat_flags=h.compat_flags,
-            raw=chunk,
-            signature=verdict,
-            link_id=chunk[-13] if signed else None,
-        )
+        h = msg._header
+        return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None)
 
     def _error(self, reason: str, raw: bytes) -> DecodeError:
         self.errors += 1
         return DecodeError(reason, bytes(raw))
+
+
+_BASE_LENGTHS: dict[type, int] = {}
+
+
+def base_payload_length(cls: type) -> int:
+    """Payload bytes of a message's base (non-extension) fields.
+
+    Generated classes do not mark extensions, but their constructors give every extension
+    field a default and no base field one; and on the wire the base fields come first
+    (size-sorted) with the extensions after them in order, one format token per field.
+    """
+    found = _BASE_LENGTHS.get(cls)
+    if found is None:
+        params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+        n_base = sum(1 for p in params if p.default is inspect.Parameter.empty)
+        tokens = re.findall(r"\d*[a-zA-Z?]", cls.unpacker.format.lstrip("<"))
+        found = _BASE_LENGTHS[cls] = struct.calcsize("<" + "".join(tokens[:n_base]))
+    return found
 
 
 def _accept_all(_mav: Any, _msgid: int) -> bool:

@@ -20,29 +20,49 @@ class SignatureVerdict(Enum):
     UNCHECKED = "unchecked"  # signed, but this decoder holds no key to check it
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Frame:
-    """One decoded MAVLink frame: header fields, the message, raw bytes, signature verdict."""
+    """One decoded MAVLink frame: header fields, the message, raw bytes, signature verdict.
+
+    Built for every frame on the hot path, so it stores only what the decoder has at hand
+    and reads the header fields from the message's pymavlink header when asked. Treat it
+    as read-only.
+    """
 
     msg: Any                 # a pymavlink MAVLink_message of the codec's dialect
-    msgid: int
+    raw: bytes
     src_system: int
     src_component: int
-    seq: int
-    version: int             # 1 or 2
-    incompat_flags: int
-    compat_flags: int
-    raw: bytes
     signature: SignatureVerdict = SignatureVerdict.UNSIGNED
     link_id: int | None = None
 
     @property
     def name(self) -> str:
-        return self.msg.get_type()
+        return self.msg._type
+
+    @property
+    def msgid(self) -> int:
+        return self.msg._header.msgId
 
     @property
     def source(self) -> tuple[int, int]:
         return (self.src_system, self.src_component)
+
+    @property
+    def seq(self) -> int:
+        return self.msg._header.seq
+
+    @property
+    def version(self) -> int:
+        return 1 if self.raw[0] == 0xFE else 2
+
+    @property
+    def incompat_flags(self) -> int:
+        return self.msg._header.incompat_flags
+
+    @property
+    def compat_flags(self) -> int:
+        return self.msg._header.compat_flags
 
 
 @dataclass(frozen=True, slots=True)

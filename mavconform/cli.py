@@ -1,0 +1,51 @@
+"""`mavconform`: the command line. Each subcommand lives in its own module.
+
+Exit codes: 0 success, 1 a finding (an operation failed, a target did not answer),
+2 a usage mistake (bad option, URI or file), with one line saying what and where.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from reference_impl.errors import UsageError
+
+from . import __version__, demo_cmd, gcs_cmd, vehicle_cmd
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2 (argparse's own convention)
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="mavconform",
+        description="Conformance and fuzz test suite for MAVLink mission implementations: a "
+                    "spec-exact reference vehicle and GCS, runnable over UDP.",
+    )
+    parser.add_argument("--version", action="version", version=f"mavconform {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
+                                parser_class=_Parser)
+    vehicle_cmd.add_parser(sub)
+    gcs_cmd.add_parser(sub)
+    demo_cmd.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except UsageError as exc:
+        print(f"mavconform: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

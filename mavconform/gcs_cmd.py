@@ -1,0 +1,133 @@
+"""`mavconform gcs ...`: drive a target vehicle with the reference GCS over UDP."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import ipaddress
+from pathlib import Path
+from typing import Iterator
+
+from reference_impl.files import Plan, load_plan, save_plan
+from reference_impl.files.plan import plan_from_items
+from reference_impl.gcs import GcsConfig, GcsNode
+from reference_impl.mission.items import PLAN_TYPES, MissionType
+from reference_impl.mission.results import OperationResult
+from reference_impl.mission.timing import Timings
+from reference_impl.net import McapCapture, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
+from reference_impl.session import GcsSession, TargetUnresponsive
+
+from .options import mavlink_id, positive
+
+DESCRIPTION = """\
+Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
+  udp:HOST:PORT    the vehicle listens there (our reference vehicle, a SITL with a UDP server)
+  udpin:HOST:PORT  we listen there and the vehicle sends to us first (as PX4/ArduPilot SITL do)
+The vehicle is found by its HEARTBEAT. Exit 0 when every operation succeeded, 1 when one
+failed or the target never answered, 2 for a usage mistake.
+"""
+
+TYPE_NAMES = {"mission": MissionType.MISSION, "fence": MissionType.FENCE,
+              "rally": MissionType.RALLY, "all": MissionType.ALL}
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    gcs = sub.add_parser("gcs", help="drive a target with the reference GCS",
+                         description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ops = gcs.add_subparsers(dest="operation", metavar="OPERATION", required=True)
+    up = ops.add_parser("upload", help="upload a .plan (mission, fence, rally) or .waypoints file",
+                        description="Upload every plan type the file holds: a .plan file sets mission, "
+                                    "geofence and rally points (an empty one clears that type); a WPL "
+                                    ".waypoints file sets the mission only.")
+    up.add_argument("file", metavar="FILE")
+    down = ops.add_parser("download", help="download into a .plan or .waypoints file",
+                          description="Download the vehicle's plans: all three types into a .plan "
+                                      "file, the mission only into a .waypoints file.")
+    down.add_argument("file", metavar="FILE")
+    clear = ops.add_parser("clear", help="clear plans on the vehicle",
+                           description="Send MISSION_CLEAR_ALL for one type or all of them.")
+    clear.add_argument("--type", choices=sorted(TYPE_NAMES), default="all", dest="plan_type",
+                       help="which plan to clear (default all)")
+    setcur = ops.add_parser("set-current", help="set the current mission item",
+                            description="Send MISSION_SET_CURRENT (or MAV_CMD_DO_SET_MISSION_CURRENT "
+                                        "with --command) and wait for MISSION_CURRENT.")
+    setcur.add_argument("seq", type=int, metavar="SEQ")
+    setcur.add_argument("--command", action="store_true", help="use the command instead of the message")
+    for p in (up, down, clear, setcur):
+        p.add_argument("--target", required=True, metavar="URI", help="udp:HOST:PORT or udpin:HOST:PORT")
+        p.add_argument("--system", type=mavlink_id, default=255, help="our system id (default 255)")
+        p.add_argument("--heartbeat-timeout", type=positive, default=5.0, metavar="S",
+                       help="how long to wait for the target's HEARTBEAT (default 5)")
+        p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
+                       help="stretch every protocol timeout by X for slow links (default 1)")
+        p.add_argument("--float", action="store_true",
+                       help="use MISSION_ITEM / MISSION_REQUEST instead of the _INT messages")
+        p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
+        p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    target = parse_udp_uri(args.target)
+    plan = load_plan(args.file) if args.operation == "upload" else None   # bad files fail before any I/O
+    with _session(args, target) as session:
+        try:
+            session.wait_for_target(args.heartbeat_timeout)
+        except TargetUnresponsive as exc:
+            print(f"error: {target}: {exc}", file=sys.stderr)
+            return 1
+        print(f"target {session.gcs.target[0]}/{session.gcs.target[1]} at {target}")
+        results = _operate(args, session, plan)
+    for r in results:
+        print(f"{'ok  ' if r.ok else 'FAIL'} {r.summary()}  [{r.finished - r.started:.2f} s, {r.retries} retries]")
+    return 0 if results and all(r.ok for r in results) else 1
+
+
+def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -> list[OperationResult]:
+    if args.operation == "upload":
+        types = PLAN_TYPES if Path(args.file).suffix.lower() == ".plan" else (MissionType.MISSION,)
+        return [session.upload(t, plan.items(t)) for t in types]
+    if args.operation == "download":
+        types = PLAN_TYPES if Path(args.file).suffix.lower() == ".plan" else (MissionType.MISSION,)
+        results = [session.download(t) for t in types]
+        if all(r.ok for r in results):
+            got = {r.mission_type: list(r.items) for r in results}
+            save_plan(plan_from_items(got.get(MissionType.MISSION, ()), got.get(MissionType.FENCE, ()),
+                                      got.get(MissionType.RALLY, ())), args.file)
+            print(f"wrote {args.file}")
+        return results
+    if args.operation == "clear":
+        return [session.clear(TYPE_NAMES[args.plan_type])]
+    return [session.set_current(args.seq, via_command=args.command)]
+
+
+@contextlib.contextmanager
+def _session(args: argparse.Namespace, target: UdpUri) -> Iterator[GcsSession]:
+    clock = MonotonicClock()
+    timings = Timings().scaled(args.time_scale)
+    config = GcsConfig(system=args.system, timings=timings, upload_int=not args.float,
+                       download_int=not args.float)
+    remote = target.address if target.mode == "udp" else None
+    gcs = GcsNode(config, remote=remote, wall_clock=clock.wall)
+    bind = target.address if target.mode == "udpin" else (_local_for(target.host), 0)
+    with UdpDriver(clock=clock) as driver:
+        driver.add_node(gcs, bind=bind)
+        capture = McapCapture(args.capture) if args.capture else None
+        if capture is not None:
+            driver.add_capture(capture)
+        try:
+            yield GcsSession(driver, gcs)
+        finally:
+            if capture is not None:
+                capture.close()
+
+
+def _local_for(host: str) -> str:
+    """Bind next to the target: loopback for a loopback target, any interface otherwise."""
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        return "127.0.0.1" if host == "localhost" else "0.0.0.0"
+    if ip.is_loopback:
+        return str(ip)
+    return "::" if ip.version == 6 else "0.0.0.0"

@@ -1,0 +1,88 @@
+"""Options shared by several commands: link faults, and checked numeric arguments.
+
+Every bad value becomes a one-line `UsageError` naming the option, so the CLI can exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from reference_impl.errors import UsageError
+from reference_impl.net import FaultModel, parse_drop_rule
+
+
+def probability(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a probability in [0, 1]")
+    return value
+
+
+def non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value >= 0.0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a finite number >= 0")
+    return value
+
+
+def positive(text: str) -> float:
+    value = non_negative(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
+    return value
+
+
+def mavlink_id(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not 1 <= value <= 255:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a MAVLink id in 1..255")
+    return value
+
+
+def add_fault_options(parser: argparse.ArgumentParser) -> None:
+    g = parser.add_argument_group(
+        "link faults", "applied to every datagram in both directions, decided by --seed")
+    g.add_argument("--loss", type=probability, default=0.0, metavar="P", help="drop probability (0..1)")
+    g.add_argument("--dup", type=probability, default=0.0, metavar="P", help="duplication probability")
+    g.add_argument("--reorder", type=probability, default=0.0, metavar="P",
+                   help="probability a datagram is held back so later ones overtake it")
+    g.add_argument("--delay-ms", type=non_negative, default=0.0, metavar="MS", help="one-way latency")
+    g.add_argument("--jitter-ms", type=non_negative, default=0.0, metavar="MS", help="extra random latency 0..MS")
+    g.add_argument("--corrupt", type=probability, default=0.0, metavar="P", help="probability of flipped bytes")
+    g.add_argument("--drop", action="append", default=[], metavar="RULE",
+                   help="drop by message: NAME (every one), NAME#N (the Nth), NAME#N+ (Nth onwards); "
+                        "repeatable, e.g. --drop MISSION_ACK#1")
+    g.add_argument("--seed", type=int, default=0, help="seed of the fault decisions (default 0)")
+
+
+def fault_model(args: argparse.Namespace) -> FaultModel | None:
+    """The FaultModel the options describe, or None when no fault was asked for."""
+    rules = tuple(parse_drop_rule(text) for text in args.drop)
+    model = FaultModel(loss=args.loss, duplicate=args.dup, reorder=args.reorder,
+                       delay=args.delay_ms / 1000, jitter=args.jitter_ms / 1000,
+                       corrupt=args.corrupt, rules=rules)
+    return None if model.is_clean else model
+
+
+def describe_faults(args: argparse.Namespace) -> str:
+    parts = [f"{name} {getattr(args, attr):g}" for name, attr in (
+        ("loss", "loss"), ("dup", "dup"), ("reorder", "reorder"), ("corrupt", "corrupt"))
+        if getattr(args, attr)]
+    if args.delay_ms or args.jitter_ms:
+        parts.append(f"delay {args.delay_ms:g}+{args.jitter_ms:g} ms")
+    parts += [f"drop {rule}" for rule in args.drop]
+    return ", ".join(parts) if parts else "none"
+
+
+def require(condition: bool, message: str) -> None:
+    if not condition:
+        raise UsageError(message)

@@ -1,0 +1,83 @@
+"""`mavconform vehicle`: serve the reference vehicle over UDP for any GCS."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from reference_impl.mission.behaviour import ServerBehaviour
+from reference_impl.mission.items import MissionType
+from reference_impl.net import MonotonicClock, UdpDriver, McapCapture, parse_udp_uri
+from reference_impl.vehicle import VehicleConfig, VehicleNode
+
+from .options import add_fault_options, describe_faults, fault_model, mavlink_id, non_negative, positive
+
+DESCRIPTION = """\
+Serve the spec-exact reference vehicle on UDP until interrupted (or --duration).
+It sends HEARTBEAT at 1 Hz, serves mission / geofence / rally upload, download, clear and
+set-current, streams MISSION_CURRENT, and flies the mission in real time after
+MAV_CMD_MISSION_START (or at once with --autostart). Any GCS that talks to it is served.
+"""
+
+EPILOG = """\
+examples:
+  mavconform vehicle --listen udp:127.0.0.1:14550
+  mavconform vehicle --listen udp:127.0.0.1:0 --loss 0.1 --reorder 0.05 --seed 7
+  mavconform vehicle --connect udp:127.0.0.1:14551     # talk first to a GCS listening there
+"""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("vehicle", help="serve the reference vehicle over UDP",
+                       description=DESCRIPTION, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--listen", default="udp:127.0.0.1:14550", metavar="URI",
+                   help="where to listen: udp:HOST:PORT (port 0: any free port; default %(default)s)")
+    p.add_argument("--connect", metavar="URI",
+                   help="also send to a GCS that listens at udp:HOST:PORT (as SITL does)")
+    p.add_argument("--system", type=mavlink_id, default=1, help="system id (default 1)")
+    p.add_argument("--component", type=mavlink_id, default=1, help="component id (default 1)")
+    p.add_argument("--capacity", type=int, default=1000, metavar="N",
+                   help="most mission items stored; more gets MAV_MISSION_NO_SPACE (default 1000)")
+    p.add_argument("--autostart", action="store_true", help="start flying as soon as a mission is accepted")
+    p.add_argument("--speed", type=positive, default=10.0, metavar="M/S", help="flight speed (default 10)")
+    p.add_argument("--duration", type=positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
+    p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
+    p.add_argument("--quiet", action="store_true", help="print only the listening line")
+    add_fault_options(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    listen = parse_udp_uri(args.listen, listen=True)
+    connect = parse_udp_uri(args.connect) if args.connect else None
+    capacity = {MissionType.MISSION: args.capacity, MissionType.FENCE: 256, MissionType.RALLY: 64}
+    config = VehicleConfig(system=args.system, component=args.component, autostart=args.autostart,
+                           speed=args.speed, behaviour=ServerBehaviour(capacity=capacity))
+    faults = fault_model(args)
+    clock = MonotonicClock()
+    vehicle = VehicleNode(config, wall_clock=clock.wall)
+    with UdpDriver(clock=clock, seed=args.seed) as driver:
+        address = driver.add_node(vehicle, bind=listen.address, outgoing=faults, incoming=faults)
+        if connect is not None:
+            vehicle.endpoint.add_address(connect.address)
+        capture = McapCapture(args.capture) if args.capture else None
+        if capture is not None:
+            driver.add_capture(capture)
+        print(f"reference vehicle {args.system}/{args.component} listening on udp:{address[0]}:{address[1]} "
+              f"(faults: {describe_faults(args)})", flush=True)
+        end = None if args.duration is None else clock.now() + args.duration
+        try:
+            while end is None or clock.now() < end:
+                step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))
+                driver.run_until(lambda: bool(vehicle.events), timeout=step)
+                for event in vehicle.events:
+                    if not args.quiet:
+                        print(event, flush=True)
+                vehicle.events.clear()
+        except KeyboardInterrupt:
+            print("stopped", file=sys.stderr)
+        finally:
+            if capture is not None:
+                capture.close()
+    return 0
