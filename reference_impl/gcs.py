@@ -91,10 +91,10 @@ class GcsNode:
             if self.target is None:
                 self._maybe_discover(frame)
                 continue
-            if frame.source != self.target and not (
-                    self.target[1] == 0 and frame.src_system == self.target[0]):
+            target = self.target
+            if frame.src_system != target[0] or (target[1] and frame.src_component != target[1]):
                 continue
-            if frame.name == "HEARTBEAT":
+            if frame.msg._type == "HEARTBEAT":
                 self.target_heartbeat = frame.msg
             if self.client is not None:
                 self._run(self.client.handle(frame, now))

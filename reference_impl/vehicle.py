@@ -16,7 +16,7 @@ from .mission import messages as m
 from .mission.actions import Send
 from .mission.behaviour import ServerBehaviour
 from .mission.constants import Cmd, CommandResult
-from .mission.items import PLAN_TYPES
+from .mission.items import PLAN_TYPES, MissionType
 from .mission.server import MissionServer
 from .net.node import Address
 from .wire.dialect import mavlink as _d
@@ -70,13 +70,15 @@ class VehicleNode:
         for frame in self.endpoint.receive(data, source):
             self.frames_received += 1
             msg = frame.msg
-            name = msg.get_type()
-            if self.server.handles(name):
-                seq_before, plan_before = self.server.progress.seq, self.server.store.opaque_id(0)
-                self._send(self.server.handle(frame, now))
-                if self.server.store.opaque_id(0) != plan_before:
+            name = msg._type
+            server = self.server
+            if server.handles(name):
+                # the stored mission is a tuple replaced on commit: identity tells a change
+                seq_before, mission_before = server.progress.seq, server.store.items(MissionType.MISSION)
+                self._send(server.handle(frame, now))
+                if server.store.items(MissionType.MISSION) is not mission_before:
                     self._plan_changed(now)
-                elif self.server.progress.seq != seq_before:
+                elif server.progress.seq != seq_before:
                     self.flight.retarget(now)
             elif name in ("COMMAND_LONG", "COMMAND_INT"):
                 self._on_command(msg, frame.source, now)
@@ -127,10 +129,12 @@ class VehicleNode:
         self._seen = state
 
     def _send(self, actions: list[Send]) -> None:
-        for action in actions:
-            self.endpoint.send(action.msg, action.to)
+        send = self.endpoint.send
+        for msg, to in actions:
+            send(msg, to)
 
     def _plan_changed(self, now: float) -> None:
+        """A new flight plan was committed (or cleared)."""
         if self.config.autostart and self.server.store.count(0):
             self._send(self.flight.start(now))
         else:

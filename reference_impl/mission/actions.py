@@ -5,22 +5,22 @@ Engines return lists of these from `handle()` and `poll()`; they never touch a s
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 Peer = tuple[int, int]  # (system id, component id)
 
 
-@dataclass(frozen=True, slots=True)
-class Send:
-    """Send `msg` to `to` (a peer), or broadcast it to every known peer when `to` is None."""
+class Send(NamedTuple):
+    """Send `msg` to `to` (a peer), or broadcast it to every known peer when `to` is None.
+
+    A NamedTuple: engines make one per message, and it is several times cheaper to build
+    than a frozen dataclass."""
 
     msg: Any
     to: Peer | None = None
 
 
-@dataclass(frozen=True, slots=True)
-class Finished:
+class Finished(NamedTuple):
     """A client operation ended; `result` is its one and only result."""
 
     result: Any

@@ -13,6 +13,7 @@ items on a download are dropped and the expected one re-requested.
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -27,6 +28,10 @@ from .timing import Timings
 from .transitions import CLIENT_TRANSITIONS, ClientEvent, ClientState
 
 Action = Send | Finished
+
+# Broadcasts with no target fields: only a running set-current cares about them.
+_STREAMED = frozenset({"HEARTBEAT", "MISSION_CURRENT", "GLOBAL_POSITION_INT", "STATUSTEXT",
+                       "MISSION_ITEM_REACHED"})
 
 # NACK codes that only a vehicle judging the item it just received sends.
 ITEM_DEFECT_CODES = frozenset({
@@ -71,7 +76,8 @@ class MissionClient:
         self.download_int = download_int          # request items with MISSION_REQUEST_INT
         self.answer_request_with_int = answer_request_with_int  # MISSION_REQUEST -> ITEM_INT
         self.state = ClientState.IDLE
-        self.history: list[tuple[ClientState, ClientEvent, ClientState]] = []
+        # the last moves, for diagnosis and for tests that walk the transition table
+        self.history: deque[tuple[ClientState, ClientEvent, ClientState]] = deque(maxlen=256)
         self.stray_replies = 0
         self._op: _Op | None = None
 
@@ -116,12 +122,14 @@ class MissionClient:
     # --- events ---------------------------------------------------------------------------
     def handle(self, frame: Frame, now: float) -> list[Action]:
         msg = frame.msg
-        if frame.src_system != self.target[0] or (
-                self.target[1] and frame.src_component != self.target[1]):
+        target = self.target
+        if frame.src_system != target[0] or (target[1] and frame.src_component != target[1]):
             return []
+        name = msg._type
+        if name in _STREAMED:
+            return self._on_set_current_reply(self._op, msg, name, now) if self._op else []
         if getattr(msg, "target_system", 0) not in (0, self.system):
             return []
-        name = msg.get_type()
         op = self._op
         if op is None:
             return self._idle_reply(msg, name)
@@ -240,6 +248,8 @@ class MissionClient:
         return []  # ACCEPTED during a download means nothing
 
     def _on_set_current_reply(self, op: _Op, msg: Any, name: str, now: float) -> list[Action]:
+        if op.operation is not Operation.SET_CURRENT:
+            return []
         if name == "MISSION_CURRENT" and msg.seq == op.seq:
             return self._finish(now, Outcome.SUCCESS)
         if name == "STATUSTEXT" and msg.severity <= Severity.WARNING:
@@ -305,8 +315,6 @@ class MissionClient:
         except KeyError:
             raise LocalProtocolError(f"client: no transition for {event.name} in {self.state.name}") from None
         self.history.append((self.state, event, new_state))
-        if len(self.history) > 256:
-            del self.history[:128]
         self.state = new_state
 
 

@@ -31,6 +31,8 @@ class MissionType(IntEnum):
 
 
 PLAN_TYPES: tuple[MissionType, ...] = (MissionType.MISSION, MissionType.FENCE, MissionType.RALLY)
+# Wire value -> plan type; a dict lookup is much cheaper than calling the enum.
+PLAN_TYPE_BY_VALUE: dict[int, MissionType] = {int(t): t for t in PLAN_TYPES}
 
 # MAV_FRAME values whose x/y are latitude/longitude (degE7 in MISSION_ITEM_INT).
 GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})
@@ -129,10 +131,10 @@ def renumber(items: Iterable[MissionItem], mission_type: MissionType | None = No
     """Items with seq 0..n-1 in the given order (and the given mission_type, if any)."""
     out = []
     for seq, item in enumerate(items):
-        changes: dict = {"seq": seq}
-        if mission_type is not None:
-            changes["mission_type"] = mission_type
-        out.append(replace(item, **changes))
+        t = item.mission_type if mission_type is None else mission_type
+        # most plans are numbered already: keep those items rather than copying them
+        out.append(item if item.seq == seq and item.mission_type is t
+                   else replace(item, seq=seq, mission_type=t))
     return out
 
 

@@ -10,7 +10,7 @@ import math
 from typing import Any
 
 from ..wire.dialect import mavlink as _d
-from .items import MissionItem, MissionType, to_float32
+from .items import PLAN_TYPE_BY_VALUE, MissionItem, MissionType, to_float32
 
 ITEM_INT = "MISSION_ITEM_INT"
 ITEM_FLOAT = "MISSION_ITEM"
@@ -35,18 +35,16 @@ def item_message(item: MissionItem, target: tuple[int, int], *, as_int: bool = T
 
 def item_from_message(msg: Any) -> MissionItem | None:
     """The canonical item a MISSION_ITEM(_INT) carries; None if its x/y cannot be an int32."""
-    if msg.get_type() == ITEM_INT:
+    if msg._type == ITEM_INT:
         x, y = msg.x, msg.y
     else:
         x, y = MissionItem.int_xy_from_float(msg.frame, msg.x, msg.y)
         if x is None or y is None:
             return None
-    return MissionItem(
-        seq=msg.seq, frame=msg.frame, command=msg.command,
-        param1=msg.param1, param2=msg.param2, param3=msg.param3, param4=msg.param4,
-        x=x, y=y, z=msg.z, current=msg.current, autocontinue=msg.autocontinue,
-        mission_type=_mission_type(msg.mission_type),
-    )
+    # positional, in MissionItem's field order (cheaper than keywords on this hot path)
+    return MissionItem(msg.seq, msg.frame, msg.command, msg.param1, msg.param2, msg.param3,
+                       msg.param4, x, y, msg.z, msg.current, msg.autocontinue,
+                       PLAN_TYPE_BY_VALUE.get(msg.mission_type, MissionType.MISSION))
 
 
 def float_xy_defect(msg: Any) -> int | None:
@@ -57,13 +55,6 @@ def float_xy_defect(msg: Any) -> int | None:
     if y is None:
         return 6
     return None
-
-
-def _mission_type(value: int) -> MissionType:
-    try:
-        return MissionType(value)
-    except ValueError:
-        return MissionType.MISSION  # callers validate the type before they get here
 
 
 def request_message(seq: int, mission_type: MissionType, target: tuple[int, int], *,

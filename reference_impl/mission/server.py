@@ -29,7 +29,7 @@ from . import messages as m
 from .actions import Peer, Send
 from .behaviour import ServerBehaviour
 from .constants import Cmd, CommandResult, MissionResult, Severity
-from .items import PLAN_TYPES, MissionItem, MissionType
+from .items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
 from .progress import MissionProgress
 from .store import MissionStore
 from .transitions import SERVER_TRANSITIONS, SlotEvent, SlotState
@@ -112,10 +112,11 @@ class MissionServer:
 
     def handle(self, frame: Frame, now: float) -> list[Send]:
         """React to one decoded frame addressed to us (others are ignored)."""
-        handler = self._handlers.get(frame.msg.get_type())
-        if handler is None or not self._addressed_to_us(frame.msg):
+        msg = frame.msg
+        handler = self._handlers.get(msg._type)
+        if handler is None or not self._addressed_to_us(msg):
             return []
-        return handler(frame.msg, frame.source, now)
+        return handler(msg, (frame.src_system, frame.src_component), now)
 
     def poll(self, now: float) -> list[Send]:
         out: list[Send] = []
@@ -373,11 +374,8 @@ class MissionServer:
         return [Send(m.statustext_message(Severity.WARNING, text))]
 
     def _plan_type(self, raw: int) -> MissionType | None:
-        try:
-            t = MissionType(raw)
-        except ValueError:
-            return None
-        if t is MissionType.ALL or t not in self.behaviour.supported_types:
+        t = PLAN_TYPE_BY_VALUE.get(raw)
+        if t is None or t not in self.behaviour.supported_types:
             return None
         return t
 
