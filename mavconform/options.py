@@ -7,25 +7,25 @@ from __future__ import annotations
 
 import argparse
 
-from reference_impl.errors import UsageError
 from reference_impl.net import FaultModel, parse_drop_rule
 
 
-def probability(text: str) -> float:
+def _number(text: str) -> float:
     try:
-        value = float(text)
+        return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def probability(text: str) -> float:
+    value = _number(text)
     if not 0.0 <= value <= 1.0:
         raise argparse.ArgumentTypeError(f"{text!r} is not a probability in [0, 1]")
     return value
 
 
 def non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    value = _number(text)
     if not value >= 0.0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"{text!r} must be a finite number >= 0")
     return value
@@ -82,7 +82,3 @@ def describe_faults(args: argparse.Namespace) -> str:
     parts += [f"drop {rule}" for rule in args.drop]
     return ", ".join(parts) if parts else "none"
 
-
-def require(condition: bool, message: str) -> None:
-    if not condition:
-        raise UsageError(message)

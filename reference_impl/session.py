@@ -53,12 +53,6 @@ class GcsSession:
     def set_current(self, seq: int, *, via_command: bool = False) -> OperationResult:
         return self._run(lambda now: self.gcs.set_current(seq, now, via_command=via_command), messages=1)
 
-    def upload_all(self, plans: dict[MissionType, Sequence[MissionItem]]) -> list[OperationResult]:
-        return [self.upload(t, plans[t]) for t in PLAN_TYPES if t in plans]
-
-    def download_all(self) -> list[OperationResult]:
-        return [self.download(t) for t in PLAN_TYPES]
-
     def _run(self, start: Callable[[float], None], *, messages: int | None) -> OperationResult:
         gcs = self.gcs
         if not gcs.connected:

@@ -90,6 +90,9 @@ class MissionClient:
         op = self._start(Operation.UPLOAD, mission_type, now, _E.START_UPLOAD)
         op.items = renumber(items, mission_type)
         op.count = len(op.items)
+        # An empty upload is applied by its MISSION_COUNT alone (count 0 = clear), so from
+        # here on the vehicle may have acted on it, as after the last item of a longer one.
+        op.last_item_sent = op.count == 0
         return self._send_and_wait(op, m.count_message(op.count, mission_type, self.target), now)
 
     def download(self, mission_type: MissionType, now: float) -> list[Action]:
@@ -241,7 +244,7 @@ class MissionClient:
         if op.operation is Operation.CLEAR:
             return self._finish(now, Outcome.SUCCESS)
         if op.operation is Operation.UPLOAD:
-            if op.last_item_sent or op.count == 0:
+            if op.last_item_sent:
                 return self._finish(now, Outcome.SUCCESS, opaque_id=getattr(msg, "opaque_id", 0))
             return self._finish(now, Outcome.PROTOCOL_ERROR, detail=(
                 f"vehicle sent ACK ACCEPTED before requesting item {op.count - 1}"))

@@ -102,10 +102,6 @@ class MissionItem:
     def __hash__(self) -> int:
         return hash(self.key())
 
-    def with_seq(self, seq: int) -> "MissionItem":
-        return replace(self, seq=seq)
-
-    # --- conversion to and from the wire's float form (MISSION_ITEM) ---------------------
     def float_xy(self) -> tuple[float, float]:
         """x, y as MISSION_ITEM carries them (float32 after the wire rounds them)."""
         scale = xy_scale(self.frame)
@@ -137,6 +133,3 @@ def renumber(items: Iterable[MissionItem], mission_type: MissionType | None = No
                    else replace(item, seq=seq, mission_type=t))
     return out
 
-
-def plans_equal(a: Sequence[MissionItem], b: Sequence[MissionItem]) -> bool:
-    return len(a) == len(b) and all(x == y for x, y in zip(a, b))

@@ -109,7 +109,3 @@ def statustext_message(severity: int, text: str) -> Any:
 def command_ack_message(command: int, result: int, target: tuple[int, int]) -> Any:
     return _d.MAVLink_command_ack_message(command, result, 0, 0, target[0], target[1])
 
-
-def float_param(value: float) -> float:
-    """A param as the wire will carry it (float32), NaN kept."""
-    return value if math.isnan(value) else to_float32(value)

@@ -155,12 +155,10 @@ class MissionServer:
 
     # --- message handlers -----------------------------------------------------------------
     def _on_count(self, msg: Any, src: Peer, now: float) -> list[Send]:
-        t = self._plan_type(msg.mission_type)
-        if t is None:
-            return self._unsupported(msg.mission_type, src)
-        slot = self._slots[t]
-        if self._busy_with_other(slot, src):
-            return self._deny(t, src)
+        slot, refusal = self._slot_for(msg, src)
+        if refusal is not None:
+            return refusal
+        t = slot.mission_type
         if slot.state is not SlotState.IDLE:
             self._leave(slot)  # the partner moved on: its old transfer is void
         count = msg.count
@@ -176,12 +174,10 @@ class MissionServer:
         return self._request(slot, now)
 
     def _on_item(self, msg: Any, src: Peer, now: float) -> list[Send]:
-        t = self._plan_type(msg.mission_type)
-        if t is None:
-            return self._unsupported(msg.mission_type, src)
-        slot = self._slots[t]
-        if self._busy_with_other(slot, src):
-            return self._deny(t, src)
+        slot, refusal = self._slot_for(msg, src)
+        if refusal is not None:
+            return refusal
+        t = slot.mission_type
         if slot.state is SlotState.IDLE:
             return self._stray_item(msg, t, src, now)
         if slot.state is not SlotState.RECEIVING:
@@ -210,12 +206,10 @@ class MissionServer:
         return self._commit(t, items, src, now)
 
     def _on_request_list(self, msg: Any, src: Peer, now: float) -> list[Send]:
-        t = self._plan_type(msg.mission_type)
-        if t is None:
-            return self._unsupported(msg.mission_type, src)
-        slot = self._slots[t]
-        if self._busy_with_other(slot, src):
-            return self._deny(t, src)
+        slot, refusal = self._slot_for(msg, src)
+        if refusal is not None:
+            return refusal
+        t = slot.mission_type
         if slot.state is not SlotState.IDLE:
             self._leave(slot)
         count = self.store.count(t)
@@ -229,12 +223,10 @@ class MissionServer:
         return [reply]
 
     def _on_request(self, msg: Any, src: Peer, now: float) -> list[Send]:
-        t = self._plan_type(msg.mission_type)
-        if t is None:
-            return self._unsupported(msg.mission_type, src)
-        slot = self._slots[t]
-        if self._busy_with_other(slot, src):
-            return self._deny(t, src)
+        slot, refusal = self._slot_for(msg, src)
+        if refusal is not None:
+            return refusal
+        t = slot.mission_type
         if slot.state is SlotState.IDLE:
             return self._stray(t, src)
         if slot.state is not SlotState.SENDING:
@@ -361,6 +353,17 @@ class MissionServer:
         self._move(self._slots[t], SlotEvent.STRAY)
         code = self.behaviour.idle_reply
         return [] if code is None else [Send(m.ack_message(code, t, src), src)]
+
+    def _slot_for(self, msg: Any, src: Peer) -> tuple[_Transfer, list[Send] | None]:
+        """The transfer slot a message is about, or the refusal to send instead: UNSUPPORTED
+        for a plan type we do not store, DENIED while another GCS's transfer holds it."""
+        t = self._plan_type(msg.mission_type)
+        if t is None:
+            return None, self._unsupported(msg.mission_type, src)  # type: ignore[return-value]
+        slot = self._slots[t]
+        if self._busy_with_other(slot, src):
+            return slot, self._deny(t, src)
+        return slot, None
 
     def _deny(self, t: MissionType, src: Peer) -> list[Send]:
         self.stats.denied += 1

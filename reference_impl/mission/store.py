@@ -3,7 +3,7 @@
 Stored separately and independently by type (seed 000, "Mission Types"). `commit` is the
 only way a plan changes, so an upload that fails can never leave a mix of old and new
 (seed 000: "A new mission should be fully uploaded and accepted before the old mission is
-replaced"); a profile that models a non-atomic autopilot writes through `write_partial`.
+replaced").
 Each commit produces a new `opaque_id` (upstream MISSION_ACK.opaque_id: it "must change
 when there is any change to the on-vehicle plan type").
 """
@@ -59,19 +59,6 @@ class MissionStore:
 
     def clear(self, mission_type: MissionType) -> None:
         self.commit(mission_type, ())
-
-    def write_partial(self, mission_type: MissionType, seq: int, item: MissionItem) -> None:
-        """Overwrite or append one item in place (for non-atomic profiles only)."""
-        plan = list(self._plans[mission_type])
-        if seq < len(plan):
-            plan[seq] = item
-        else:
-            plan.append(item)
-        self.commit(mission_type, plan)
-
-    def truncate(self, mission_type: MissionType, count: int) -> None:
-        """Cut the stored plan to `count` items (non-atomic profiles only)."""
-        self.commit(mission_type, self._plans[mission_type][:count])
 
     def snapshot(self) -> dict[MissionType, tuple[MissionItem, ...]]:
         return dict(self._plans)

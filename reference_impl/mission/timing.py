@@ -26,8 +26,3 @@ class Timings:
         """Every deadline stretched by `factor` (slow links); retry counts unchanged."""
         return replace(self, default_timeout=self.default_timeout * factor,
                        item_timeout=self.item_timeout * factor)
-
-    @property
-    def give_up_after(self) -> float:
-        """How long a silent peer keeps an item transfer alive on the vehicle."""
-        return self.item_timeout * (self.max_retries + 1)

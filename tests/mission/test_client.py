@@ -331,3 +331,16 @@ def test_client_transition_table_is_covered():
         seen |= {(before, event) for before, event, _ in e.engine.history}
     assert seen == set(CLIENT_TRANSITIONS), set(CLIENT_TRANSITIONS) - seen
     assert all(e.engine.state is ClientState.IDLE for e in engines)
+
+
+def test_cancelled_or_unanswered_empty_upload_is_an_unknown_outcome():
+    """MISSION_COUNT 0 is the whole upload: once sent, the vehicle may already have cleared
+    (found by the property test: count 0 then an immediate cancel was reported as 'known')."""
+    s = client()
+    s.call(s.engine.upload(T.MISSION, [], s.now))
+    s.call(s.engine.cancel(s.now))
+    assert result(s).outcome is Outcome.CANCELLED and result(s).outcome_unknown
+    s2 = client()
+    s2.call(s2.engine.upload(T.MISSION, [], s2.now))
+    s2.advance(30)
+    assert result(s2).outcome is Outcome.TIMEOUT and result(s2).outcome_unknown
