@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from reference_impl.errors import UsageError
+from reference_impl.errors import LocalProtocolError, UsageError
 
 from . import __version__, demo_cmd, gcs_cmd, vehicle_cmd
 
@@ -43,6 +43,9 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"mavconform: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except LocalProtocolError as exc:  # our bug, not the user's nor the target's
+        print(f"mavconform: internal error (please report it): {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         return 130
 

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 
-from reference_impl.files import SAMPLES_DIR, load_plan
+from reference_impl.files import SAMPLES_DIR, load_plan, plan_types_in
 from reference_impl.gcs import GcsNode
-from reference_impl.mission.items import PLAN_TYPES, MissionType, renumber
+from reference_impl.mission.items import MissionType, renumber
 from reference_impl.net import FaultModel, McapCapture, MonotonicClock, UdpDriver
 from reference_impl.session import GcsSession, TargetUnresponsive
 from reference_impl.vehicle import VehicleNode
@@ -40,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     plan = load_plan(args.plan)
-    types = PLAN_TYPES if Path(args.plan).suffix.lower() == ".plan" else (MissionType.MISSION,)
+    types = plan_types_in(args.plan)
     faults = FaultModel(loss=args.loss, duplicate=args.dup, reorder=args.reorder, reorder_delay=0.03)
     clock = MonotonicClock()
     vehicle = VehicleNode(wall_clock=clock.wall)

@@ -6,19 +6,17 @@ import argparse
 import contextlib
 import sys
 import ipaddress
-from pathlib import Path
 from typing import Iterator
 
-from reference_impl.files import Plan, load_plan, save_plan
-from reference_impl.files.plan import plan_from_items
+from reference_impl.files import Plan, check_writable, load_plan, plan_from_items, plan_types_in, save_plan
 from reference_impl.gcs import GcsConfig, GcsNode
-from reference_impl.mission.items import PLAN_TYPES, MissionType
+from reference_impl.mission.items import MissionType
 from reference_impl.mission.results import OperationResult
 from reference_impl.mission.timing import Timings
 from reference_impl.net import McapCapture, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
 from reference_impl.session import GcsSession, TargetUnresponsive
 
-from .options import mavlink_id, positive
+from .options import mavlink_id, positive, seq_number
 
 DESCRIPTION = """\
 Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
@@ -52,7 +50,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     setcur = ops.add_parser("set-current", help="set the current mission item",
                             description="Send MISSION_SET_CURRENT (or MAV_CMD_DO_SET_MISSION_CURRENT "
                                         "with --command) and wait for MISSION_CURRENT.")
-    setcur.add_argument("seq", type=int, metavar="SEQ")
+    setcur.add_argument("seq", type=seq_number, metavar="SEQ", help="mission item number, 0..65535")
     setcur.add_argument("--command", action="store_true", help="use the command instead of the message")
     for p in (up, down, clear, setcur):
         p.add_argument("--target", required=True, metavar="URI", help="udp:HOST:PORT or udpin:HOST:PORT")
@@ -62,14 +60,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
                        help="stretch every protocol timeout by X for slow links (default 1)")
         p.add_argument("--float", action="store_true",
-                       help="use MISSION_ITEM / MISSION_REQUEST instead of the _INT messages")
+                       help="download with MISSION_REQUEST / MISSION_ITEM instead of the _INT "
+                            "messages (uploads always answer in the form the vehicle asks for)")
         p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
         p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     target = parse_udp_uri(args.target)
-    plan = load_plan(args.file) if args.operation == "upload" else None   # bad files fail before any I/O
+    # bad files and paths fail before any network I/O
+    plan = load_plan(args.file) if args.operation == "upload" else None
+    if args.operation == "download":
+        check_writable(args.file)
     with _session(args, target) as session:
         try:
             session.wait_for_target(args.heartbeat_timeout)
@@ -85,11 +87,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -> list[OperationResult]:
     if args.operation == "upload":
-        types = PLAN_TYPES if Path(args.file).suffix.lower() == ".plan" else (MissionType.MISSION,)
-        return [session.upload(t, plan.items(t)) for t in types]
+        return [session.upload(t, plan.items(t)) for t in plan_types_in(args.file)]
     if args.operation == "download":
-        types = PLAN_TYPES if Path(args.file).suffix.lower() == ".plan" else (MissionType.MISSION,)
-        results = [session.download(t) for t in types]
+        results = [session.download(t) for t in plan_types_in(args.file)]
         if all(r.ok for r in results):
             got = {r.mission_type: list(r.items) for r in results}
             save_plan(plan_from_items(got.get(MissionType.MISSION, ()), got.get(MissionType.FENCE, ()),
@@ -105,8 +105,7 @@ def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -
 def _session(args: argparse.Namespace, target: UdpUri) -> Iterator[GcsSession]:
     clock = MonotonicClock()
     timings = Timings().scaled(args.time_scale)
-    config = GcsConfig(system=args.system, timings=timings, upload_int=not args.float,
-                       download_int=not args.float)
+    config = GcsConfig(system=args.system, timings=timings, download_int=not args.float)
     remote = target.address if target.mode == "udp" else None
     gcs = GcsNode(config, remote=remote, wall_clock=clock.wall)
     bind = target.address if target.mode == "udpin" else (_local_for(target.host), 0)

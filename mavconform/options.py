@@ -48,6 +48,16 @@ def mavlink_id(text: str) -> int:
     return value
 
 
+def seq_number(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not 0 <= value <= 0xFFFF:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a mission item number in 0..65535")
+    return value
+
+
 def add_fault_options(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group(
         "link faults", "applied to every datagram in both directions, decided by --seed")

@@ -10,7 +10,7 @@ from reference_impl.mission.items import MissionType
 from reference_impl.net import MonotonicClock, UdpDriver, McapCapture, parse_udp_uri
 from reference_impl.vehicle import VehicleConfig, VehicleNode
 
-from .options import add_fault_options, describe_faults, fault_model, mavlink_id, non_negative, positive
+from .options import add_fault_options, describe_faults, fault_model, mavlink_id, positive, seq_number
 
 DESCRIPTION = """\
 Serve the spec-exact reference vehicle on UDP until interrupted (or --duration).
@@ -37,7 +37,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="also send to a GCS that listens at udp:HOST:PORT (as SITL does)")
     p.add_argument("--system", type=mavlink_id, default=1, help="system id (default 1)")
     p.add_argument("--component", type=mavlink_id, default=1, help="component id (default 1)")
-    p.add_argument("--capacity", type=int, default=1000, metavar="N",
+    p.add_argument("--capacity", type=seq_number, default=1000, metavar="N",
                    help="most mission items stored; more gets MAV_MISSION_NO_SPACE (default 1000)")
     p.add_argument("--autostart", action="store_true", help="start flying as soon as a mission is accepted")
     p.add_argument("--speed", type=positive, default=10.0, metavar="M/S", help="flight speed (default 10)")
@@ -51,7 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     listen = parse_udp_uri(args.listen, listen=True)
     connect = parse_udp_uri(args.connect) if args.connect else None
-    capacity = {MissionType.MISSION: args.capacity, MissionType.FENCE: 256, MissionType.RALLY: 64}
+    capacity = {**ServerBehaviour().capacity, MissionType.MISSION: args.capacity}
     config = VehicleConfig(system=args.system, component=args.component, autostart=args.autostart,
                            speed=args.speed, behaviour=ServerBehaviour(capacity=capacity))
     faults = fault_model(args)

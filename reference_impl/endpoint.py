@@ -19,6 +19,7 @@ from .wire.frame import DecodeError, Frame, SignatureVerdict
 from .wire.signing import SigningKey
 
 MAX_KEPT_ERRORS = 100
+MAX_ADDRESSES = 64   # learned peers kept for broadcasts; the oldest learned one goes first
 
 
 class MavlinkEndpoint:
@@ -31,6 +32,7 @@ class MavlinkEndpoint:
         self.require_signature = require_signature
         self.peers: dict[Peer, Address] = {}
         self.addresses: dict[Address, None] = {}   # insertion-ordered set: broadcast targets
+        self._configured: set[Address] = set()     # given by add_address: never forgotten
         self.decode_errors: deque[tuple[Address, DecodeError]] = deque(maxlen=MAX_KEPT_ERRORS)
         self.rejected_signatures = 0
         self._outbox: list[tuple[bytes, Address]] = []
@@ -45,12 +47,11 @@ class MavlinkEndpoint:
 
     def add_address(self, address: Address) -> None:
         """A place to send to before anyone has spoken (the target of `udp:HOST:PORT`)."""
+        self._configured.add(address)
         self.addresses.setdefault(address, None)
 
     def receive(self, data: bytes, source: Address) -> list[Frame]:
         """Frames in a datagram that passed the signature policy; errors are recorded."""
-        if source not in self.addresses:
-            self.addresses[source] = None
         frames: list[Frame] = []
         peers = self.peers
         for item in self.decoder.feed(data):
@@ -63,7 +64,17 @@ class MavlinkEndpoint:
                 continue
             peers[(item.src_system, item.src_component)] = source
             frames.append(item)
+        if frames and source not in self.addresses:
+            self._learn(source)   # only a source that sent a valid frame is a peer
         return frames
+
+    def _learn(self, source: Address) -> None:
+        addresses = self.addresses
+        if len(addresses) >= MAX_ADDRESSES:
+            oldest = next((a for a in addresses if a not in self._configured), None)
+            if oldest is not None:
+                del addresses[oldest]
+        addresses[source] = None
 
     def _signature_acceptable(self, frame: Frame) -> bool:
         verdict = frame.signature

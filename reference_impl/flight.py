@@ -55,7 +55,8 @@ class FlightSim:
         return self.progress.running
 
     def start(self, now: float) -> list[Send]:
-        """MAV_CMD_MISSION_START: fly from the current item. False if there is nothing to fly."""
+        """MAV_CMD_MISSION_START: fly from the current item. Returns the announcements to
+        send; an empty list means there was no mission to fly."""
         if self.store.count(MissionType.MISSION) == 0:
             return []
         self.progress.running, self.progress.complete = True, False

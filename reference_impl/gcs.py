@@ -51,7 +51,7 @@ class GcsNode:
         self.target_heartbeat: Any = None
         self.client: MissionClient | None = None
         self.results: list[OperationResult] = []
-        self.received: list[Any] = []   # every frame from the target outside the client's business
+        self.received: list[Any] = []   # every message from the target (the first 10 000)
         self._next_heartbeat: float | None = 0.0
         if self.target is not None:
             self._make_client()

@@ -63,6 +63,11 @@ def test_dead_target_is_a_finding_not_a_hang(capsys):
     (["vehicle", "--drop", "NOT_A_MESSAGE#2"], "NOT_A_MESSAGE"),
     (["gcs", "clear", "--target", "udp:127.0.0.1:5", "--type", "bogus"], "invalid choice"),
     (["frobnicate"], "invalid choice"),
+    (["gcs", "set-current", "--target", "udp:127.0.0.1:5", "70000"], "0..65535"),
+    (["gcs", "set-current", "--target", "udp:127.0.0.1:5", "--", "-3"], "0..65535"),
+    (["gcs", "download", "--target", "udp:127.0.0.1:5", "back.json"], "unknown mission file type"),
+    (["gcs", "download", "--target", "udp:127.0.0.1:5", "/no/such/dir/back.plan"], "does not exist"),
+    (["vehicle", "--capacity", "-1"], "0..65535"),
 ])
 def test_usage_mistakes_get_one_line_and_exit_2(argv, needle, capsys):
     with pytest.raises(SystemExit) as exc_info:

@@ -9,10 +9,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from reference_impl.files.plan import Plan, PlanFileError, plan_from_items
+from reference_impl.mission.items import PLAN_TYPES, MissionType
 from reference_impl.files.qgc_plan import format_qgc_plan, parse_qgc_plan
 from reference_impl.files.wpl import HEADER as WPL_HEADER, format_wpl, looks_like_wpl, parse_wpl
 
-__all__ = ["Plan", "PlanFileError", "load_plan", "save_plan", "plan_from_items", "SAMPLES_DIR"]
+__all__ = ["Plan", "PlanFileError", "check_writable", "load_plan", "plan_from_items", "plan_types_in",
+           "save_plan", "SAMPLES_DIR"]
 
 SAMPLES_DIR = Path(__file__).parent / "samples"
 PLAN_SUFFIX = ".plan"
@@ -35,6 +37,27 @@ def load_plan(path: str | Path) -> Plan:
         return parse_wpl(text, source)
     raise PlanFileError(f"{source}:1: not a mission file: expected a .plan file or the header "
                         f"{WPL_HEADER!r}, found {first_line.strip()[:40]!r}")
+
+
+def plan_types_in(path: str | Path) -> tuple[MissionType, ...]:
+    """The plan types a file of this kind holds: all three in a .plan, the mission in WPL.
+
+    Checks the file name only, so a command can refuse a bad output path before any I/O."""
+    suffix = Path(path).suffix.lower()
+    if suffix == PLAN_SUFFIX:
+        return PLAN_TYPES
+    if suffix in WPL_SUFFIXES:
+        return (MissionType.MISSION,)
+    raise PlanFileError(f"{path}: unknown mission file type {suffix or '(no extension)'!r}; "
+                        f"use {PLAN_SUFFIX} or one of {', '.join(WPL_SUFFIXES)}")
+
+
+def check_writable(path: str | Path) -> None:
+    """Refuse an output path whose type is unknown or whose folder does not exist."""
+    plan_types_in(path)
+    folder = Path(path).resolve().parent
+    if not folder.is_dir():
+        raise PlanFileError(f"{path}: cannot write: folder {folder} does not exist")
 
 
 def save_plan(plan: Plan, path: str | Path) -> None:

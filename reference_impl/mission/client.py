@@ -56,6 +56,10 @@ class _Op:
     last_item_sent: bool = False   # upload: the final item went out at least once
     opaque_id: int = 0
     seq: int = 0                   # set current: the requested item
+    via_command: bool = False      # set current: by MAV_CMD_DO_SET_MISSION_CURRENT
+    last_request: int = -1         # upload: the seq the vehicle asked for last
+    highest_request: int = -1      # upload: the highest seq it has asked for
+    answers: int = 0               # upload: items sent in answer to requests
     retries: int = 0
     consecutive: int = 0
     max_consecutive: int = 0
@@ -105,7 +109,7 @@ class MissionClient:
 
     def set_current(self, seq: int, now: float, *, via_command: bool = False) -> list[Action]:
         op = self._start(Operation.SET_CURRENT, MissionType.MISSION, now, _E.START_SET_CURRENT)
-        op.seq = seq
+        op.seq, op.via_command = seq, via_command
         msg = (m.set_current_command(seq, self.target) if via_command
                else m.set_current_message(seq, self.target))
         return self._send_and_wait(op, msg, now)
@@ -119,8 +123,11 @@ class MissionClient:
         if op.operation in (Operation.UPLOAD, Operation.DOWNLOAD):
             out.append(self._to_target(m.ack_message(
                 MissionResult.OPERATION_CANCELLED, op.mission_type, self.target)))
+        # a clear or set-current already sent may have been applied; so may an upload
+        # whose last item went out
+        unknown = op.operation in (Operation.CLEAR, Operation.SET_CURRENT) or op.last_item_sent
         return out + self._finish(now, Outcome.CANCELLED, detail="cancelled by this GCS",
-                                  unknown=op.operation is Operation.UPLOAD and op.last_item_sent)
+                                  unknown=unknown)
 
     # --- events ---------------------------------------------------------------------------
     def handle(self, frame: Frame, now: float) -> list[Action]:
@@ -154,14 +161,14 @@ class MissionClient:
         if op is None or op.deadline is None or now < op.deadline:
             return []
         if op.consecutive >= self.timings.max_retries:
-            what = {Operation.UPLOAD: "the vehicle's next request or final ACK",
-                    Operation.DOWNLOAD: "the vehicle's reply",
-                    Operation.CLEAR: "MISSION_ACK", Operation.SET_CURRENT: "MISSION_CURRENT"}
+            what = {Operation.UPLOAD: "no request or final ACK from the vehicle",
+                    Operation.DOWNLOAD: "no reply from the vehicle",
+                    Operation.CLEAR: "no MISSION_ACK", Operation.SET_CURRENT: "no MISSION_CURRENT"}
             unknown = (op.operation is Operation.CLEAR
                        or (op.operation is Operation.UPLOAD and op.last_item_sent)
                        or op.operation is Operation.SET_CURRENT)
             return self._finish(now, Outcome.TIMEOUT, unknown=unknown,
-                                detail=f"no {what[op.operation]} after {op.consecutive} retries")
+                                detail=f"{what[op.operation]} after {op.consecutive} retries")
         op.retries += 1
         op.consecutive += 1
         op.max_consecutive = max(op.max_consecutive, op.consecutive)
@@ -180,14 +187,24 @@ class MissionClient:
             out = [self._to_target(m.ack_message(MissionResult.INVALID_SEQUENCE, op.mission_type, self.target))]
             return out + self._finish(now, Outcome.PROTOCOL_ERROR,
                                       detail=f"vehicle requested seq {msg.seq} of a {op.count}-item upload")
+        op.answers += 1
+        if op.answers > (op.count + 1) * (self.timings.max_retries + 1) * 2:
+            return self._finish(now, Outcome.PROTOCOL_ERROR, unknown=op.last_item_sent, detail=(
+                f"vehicle requested items {op.answers} times for a {op.count}-item upload"))
         self._move(_E.REQUEST)
-        as_int = self.upload_int if msg.get_type() == m.REQUEST_INT else self.answer_request_with_int
-        item_msg = m.item_message(op.items[msg.seq], self.target, as_int=as_int)
-        if msg.seq == op.count - 1:
+        seq = msg.seq
+        as_int = self.upload_int if msg._type == m.REQUEST_INT else self.answer_request_with_int
+        item_msg = m.item_message(op.items[seq], self.target, as_int=as_int)
+        if seq == op.count - 1:
             op.last_item_sent = True
-        op.consecutive = 0
         op.last_sent = item_msg
-        op.deadline = now + self.timings.default_timeout
+        # Progress (the vehicle moving on) restarts the wait; repeated or backward requests
+        # are answered but do not, so a vehicle stuck on one item cannot keep us forever.
+        if seq > op.highest_request or seq == op.last_request + 1:
+            op.consecutive = 0
+            op.deadline = now + self.timings.default_timeout
+        op.highest_request = max(op.highest_request, seq)
+        op.last_request = seq
         return [self._to_target(item_msg)]
 
     def _on_count(self, op: _Op, msg: Any, now: float) -> list[Action]:
@@ -204,15 +221,21 @@ class MissionClient:
     def _on_item(self, op: _Op, msg: Any, now: float) -> list[Action]:
         if self.state is not _S.DOWNLOAD_REQUESTING:
             return []
+        if msg.seq != op.expected:
+            # Seed 000: dropped, and the expected item re-requested. A copy of an item we
+            # already have (seq < expected) needs no new request: ours is out and its timer
+            # covers a loss. A gap is re-requested at once, without moving the deadline.
+            self._move(_E.ITEM_OUT_OF_SEQUENCE)
+            if msg.seq < op.expected:
+                return []
+            return [self._to_target(m.request_message(
+                op.expected, op.mission_type, self.target, as_int=self.download_int))]
         if msg.mission_type != op.mission_type:
             # Field report (ANCHORS.md): fence items labelled as mission items.
             ack = self._to_target(m.ack_message(MissionResult.ERROR, op.mission_type, self.target))
             return [ack] + self._finish(now, Outcome.PROTOCOL_ERROR, detail=(
                 f"vehicle sent a mission_type {msg.mission_type} item during a "
                 f"{op.mission_type.label} download"))
-        if msg.seq != op.expected:
-            self._move(_E.ITEM_OUT_OF_SEQUENCE)
-            return self._request_expected(op, now)
         item = m.item_from_message(msg)
         if item is None:
             ack = self._to_target(m.ack_message(MissionResult.ERROR, op.mission_type, self.target))
@@ -246,6 +269,8 @@ class MissionClient:
         if op.operation is Operation.UPLOAD:
             if op.last_item_sent:
                 return self._finish(now, Outcome.SUCCESS, opaque_id=getattr(msg, "opaque_id", 0))
+            if self.state is _S.UPLOAD_COUNT_SENT:
+                return []  # before any request: a late copy from an earlier operation
             return self._finish(now, Outcome.PROTOCOL_ERROR, detail=(
                 f"vehicle sent ACK ACCEPTED before requesting item {op.count - 1}"))
         return []  # ACCEPTED during a download means nothing
@@ -255,7 +280,8 @@ class MissionClient:
             return []
         if name == "MISSION_CURRENT" and msg.seq == op.seq:
             return self._finish(now, Outcome.SUCCESS)
-        if name == "STATUSTEXT" and msg.severity <= Severity.WARNING:
+        if name == "STATUSTEXT" and msg.severity <= Severity.WARNING and not op.via_command:
+            # the message form's only failure notice (seed 000); the command has COMMAND_ACK
             text = msg.text.decode(errors="replace") if isinstance(msg.text, bytes) else msg.text
             return self._finish(now, Outcome.REJECTED, detail=f"vehicle said: {text}")
         if (name == "COMMAND_ACK" and msg.command == Cmd.DO_SET_MISSION_CURRENT

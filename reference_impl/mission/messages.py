@@ -10,6 +10,7 @@ import math
 from typing import Any
 
 from ..wire.dialect import mavlink as _d
+from .constants import Cmd
 from .items import PLAN_TYPE_BY_VALUE, MissionItem, MissionType, to_float32
 
 ITEM_INT = "MISSION_ITEM_INT"
@@ -91,7 +92,7 @@ def set_current_message(seq: int, target: tuple[int, int]) -> Any:
 def set_current_command(seq: int, target: tuple[int, int]) -> Any:
     """COMMAND_LONG MAV_CMD_DO_SET_MISSION_CURRENT (param1 = seq, param2 = 0: no reset)."""
     return _d.MAVLink_command_long_message(
-        target[0], target[1], 224, 0, float(seq), 0, 0, 0, 0, 0, 0)
+        target[0], target[1], Cmd.DO_SET_MISSION_CURRENT, 0, float(seq), 0, 0, 0, 0, 0, 0)
 
 
 def current_message(seq: int, total: int, state: int, mode: int, ids: tuple[int, int, int]) -> Any:

@@ -64,7 +64,7 @@ class ServerStats:
     rerequests: int = 0        # re-requests sent because an item arrived out of sequence
     uploads_accepted: int = 0
     uploads_failed: int = 0
-    downloads_served: int = 0
+    downloads_served: int = 0  # downloads the GCS ended with a MISSION_ACK (any code)
     denied: int = 0
     stray: int = 0
     history: list[tuple[MissionType, SlotState, SlotEvent, SlotState]] = field(default_factory=list)
@@ -161,6 +161,9 @@ class MissionServer:
         t = slot.mission_type
         if slot.state is not SlotState.IDLE:
             self._leave(slot)  # the partner moved on: its old transfer is void
+        # A new upload begins: late copies of the previous one's items no longer prove
+        # anything about what is stored, so they must not draw a repeated ACCEPTED.
+        self._last_accepted.pop(t, None)
         count = msg.count
         if count > self.behaviour.capacity.get(t, 0):
             self._move(slot, SlotEvent.COUNT_REJECTED)
@@ -183,10 +186,7 @@ class MissionServer:
         if slot.state is not SlotState.RECEIVING:
             return []  # an item from our own download partner means nothing; ignore it
         if msg.seq != slot.expected:
-            # Seed 000: an out-of-sequence item is dropped and the expected one re-requested.
-            self._move(slot, SlotEvent.ITEM_OUT_OF_SEQUENCE)
-            self.stats.rerequests += 1
-            return self._request(slot, now, reset_retries=False)
+            return self._out_of_sequence(slot, msg.seq, now)
         item = m.item_from_message(msg)
         if item is None:
             code = (MissionResult.INVALID_PARAM5_X if m.float_xy_defect(msg) == 5
@@ -310,14 +310,32 @@ class MissionServer:
             return []
         return [Send(m.ack_message(MissionResult.OPERATION_CANCELLED, t, partner), partner)]
 
+    def _out_of_sequence(self, slot: _Transfer, seq: int, now: float) -> list[Send]:
+        """Seed 000: an out-of-sequence item is dropped and the expected one re-requested.
+
+        A copy of an item already received (seq < expected) is dropped without a new
+        request: our request for the expected item is already out and its timer covers a
+        loss, while answering every stale duplicate would start a second request/item
+        stream for the rest of the transfer, then a third, and so on. An item beyond the
+        expected one (a gap) is re-requested at once. Neither moves the deadline or resets
+        the retry count: only progress does, so a peer that keeps sending the wrong item
+        cannot hold the transfer open."""
+        self._move(slot, SlotEvent.ITEM_OUT_OF_SEQUENCE)
+        if seq < slot.expected:
+            return []
+        self.stats.rerequests += 1
+        return [Send(self._request_msg(slot), slot.partner)]
+
     # --- helpers --------------------------------------------------------------------------
+    def _request_msg(self, slot: _Transfer) -> Any:
+        return m.request_message(slot.expected, slot.mission_type, slot.partner,
+                                 as_int=self.behaviour.request_int)
+
     def _request(self, slot: _Transfer, now: float, *, reset_retries: bool = True) -> list[Send]:
         if reset_retries:
             slot.retries = 0
         slot.deadline = now + self.behaviour.timings.item_timeout
-        msg = m.request_message(slot.expected, slot.mission_type, slot.partner,
-                                as_int=self.behaviour.request_int)
-        return [Send(msg, slot.partner)]
+        return [Send(self._request_msg(slot), slot.partner)]
 
     def _commit(self, t: MissionType, items: list[MissionItem], src: Peer, now: float) -> list[Send]:
         opaque_id = self.store.commit(t, items)

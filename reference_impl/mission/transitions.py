@@ -23,7 +23,7 @@ class SlotEvent(Enum):
     COUNT_REJECTED = "MISSION_COUNT refused (NO_SPACE)"
     ITEM_NEXT = "expected item, more to come"
     ITEM_LAST = "expected last item: commit"
-    ITEM_OUT_OF_SEQUENCE = "item out of sequence: re-request"
+    ITEM_OUT_OF_SEQUENCE = "item out of sequence: dropped (a gap is re-requested)"
     ITEM_REJECTED = "item refused by validation"
     REQUEST_LIST = "MISSION_REQUEST_LIST, plan not empty"
     REQUEST_LIST_EMPTY = "MISSION_REQUEST_LIST, plan empty"
@@ -85,7 +85,7 @@ class ClientEvent(Enum):
     REQUEST = "vehicle requested an item"
     COUNT = "vehicle sent MISSION_COUNT"
     ITEM = "expected item received"
-    ITEM_OUT_OF_SEQUENCE = "item out of sequence: re-request"
+    ITEM_OUT_OF_SEQUENCE = "item out of sequence: dropped (a gap is re-requested)"
     TIMEOUT_RETRY = "timeout: resend"
     FINISH = "operation finished (success, NACK, timeout, cancel or protocol error)"
 

@@ -344,3 +344,76 @@ def test_cancelled_or_unanswered_empty_upload_is_an_unknown_outcome():
     s2.call(s2.engine.upload(T.MISSION, [], s2.now))
     s2.advance(30)
     assert result(s2).outcome is Outcome.TIMEOUT and result(s2).outcome_unknown
+
+
+def test_a_vehicle_stuck_on_one_request_cannot_hold_the_upload():
+    """Review finding: repeated requests for the same item answered but not counted as
+    progress; the upload ends by timeout in bounded time."""
+    s = client()
+    s.call(s.engine.upload(T.MISSION, plan(3), s.now))
+    for _ in range(200):
+        s.feed(req(0), VEHICLE)
+        s.advance(0.2)
+        if s.results:
+            break
+    r = result(s)
+    assert r.outcome is Outcome.TIMEOUT and s.now < 12
+
+
+def test_a_vehicle_alternating_requests_is_a_protocol_error_not_a_loop():
+    s = client()
+    s.call(s.engine.upload(T.MISSION, plan(2), s.now))
+    for i in range(1000):
+        s.feed(req(i % 2), VEHICLE)
+        if s.results:
+            break
+    r = result(s)
+    assert r.outcome is Outcome.PROTOCOL_ERROR and "requested items" in r.detail
+
+
+def test_stale_messages_from_an_earlier_operation_are_ignored():
+    """Review finding: a late ACCEPTED before any request, or a late item of another type
+    with the wrong seq, must not end the next operation."""
+    s = client()
+    s.call(s.engine.upload(T.MISSION, plan(2), s.now))
+    s.feed(vack(R.ACCEPTED), VEHICLE)                # a late copy from before
+    assert s.results == [] and s.engine.busy
+    s2 = client()
+    s2.call(s2.engine.download(T.FENCE, s2.now))
+    s2.feed(m.count_message(2, T.FENCE, GCS), VEHICLE)
+    s2.feed(vack(R.ACCEPTED, T.FENCE), VEHICLE)
+    s2.feed(_download_reply(plan(3), 2), VEHICLE)     # a stale mission item, seq 2
+    assert s2.results == []
+    for i in range(2):
+        s2.feed(_download_reply(plan(2, T.FENCE), i), VEHICLE)
+    assert result(s2).ok
+
+
+def test_download_duplicates_do_not_multiply_requests():
+    s = client()
+    items = plan(10)
+    out = s.call(s.engine.download(T.MISSION, s.now))
+    out = s.feed(m.count_message(10, T.MISSION, GCS), VEHICLE)
+    for _ in range(10):
+        seq = out[-1].seq
+        out = s.feed(_download_reply(items, seq), VEHICLE)
+        s.feed(_download_reply(items, seq), VEHICLE)
+    assert result(s).items == tuple(items)
+    assert len(only([msg for _, msg in s.sent_at], "MISSION_REQUEST_INT")) == 10
+
+
+def test_cancelled_clear_is_an_unknown_outcome():
+    s = client()
+    s.call(s.engine.clear(T.MISSION, s.now))
+    s.call(s.engine.cancel(s.now))
+    assert result(s).outcome_unknown
+
+
+def test_set_current_by_command_is_not_rejected_by_an_unrelated_statustext():
+    s = client()
+    s.call(s.engine.set_current(2, s.now, via_command=True))
+    s.feed(m.statustext_message(4, "Low battery"), VEHICLE)
+    assert s.results == []
+    s.feed(m.command_ack_message(224, 0, GCS), VEHICLE)
+    s.feed(m.current_message(2, 5, 2, 2, (0, 0, 0)), VEHICLE)
+    assert result(s).ok

@@ -7,7 +7,8 @@ time. After every operation:
 - success: the vehicle holds exactly what was uploaded / what was downloaded is what it holds;
 - failure: the vehicle holds exactly the old plan (atomicity), except that when the result
   says `outcome_unknown` (final ACK never arrived) it holds the old or the new plan whole;
-- no message was retried more often than the limit, on either end.
+- no message was retried more often than the limit, on either end, and the traffic of an
+  operation stays linear in the size of the plan (no duplicate storms).
 """
 
 from __future__ import annotations
@@ -80,6 +81,8 @@ def test_operations_under_faults_keep_the_protocol_invariants(seed, up, down, op
     for op in ops:
         before = store.snapshot()
         n_results = len(gcs.results)
+        sent_before = sum(link.sent for link in net.stats.values())
+        t_before = net.clock.now()
         if op[0] == "clear":
             result = session.clear(op[1])
         else:
@@ -87,6 +90,12 @@ def test_operations_under_faults_keep_the_protocol_invariants(seed, up, down, op
         settled = lambda: vehicle.server.is_idle() and not gcs.busy and net.in_flight() == 0  # noqa: E731
         assert net.run_until(settled, timeout=IDLE_BOUND), f"not idle {IDLE_BOUND}s after {result.summary()}"
         assert len(gcs.results) == n_results + 1, "an operation must end with exactly one result"
+        # Traffic stays linear in the plan: per item a request and an answer, each resent at
+        # most max_retries times, doubled for duplication; plus 4 stream messages a second.
+        n = max(len(op[2]) if op[0] == "upload" else 0, *(len(p) for p in before.values()))
+        sent = sum(link.sent for link in net.stats.values()) - sent_before
+        bound = 2 * 2 * (n + 2) * (LIMIT + 1) + 5 * (net.clock.now() - t_before) + 10
+        assert sent <= bound, f"{sent} datagrams for {result.summary()} (bound {bound:.0f})"
         assert result.max_consecutive_retries <= LIMIT
         after = store.snapshot()
         touched = set(PLAN_TYPES) if op[1] is T.ALL else {op[1]}

@@ -86,12 +86,41 @@ def test_out_of_sequence_item_is_dropped_and_expected_item_rerequested():
     s.feed(item_int(items[0]))
     out = s.feed(item_int(items[2]))          # skips seq 1
     assert names(out) == ["MISSION_REQUEST_INT"] and out[0].seq == 1
-    out = s.feed(item_int(items[0]))          # a duplicate of seq 0
-    assert names(out) == ["MISSION_REQUEST_INT"] and out[0].seq == 1
+    out = s.feed(item_int(items[0]))          # a stale duplicate of seq 0: dropped, no new request
+    assert out == []
     s.feed(item_int(items[1]))
     s.feed(item_int(items[2]))
     assert list(s.engine.store.items(T.MISSION)) == items
-    assert s.engine.stats.rerequests == 2
+    assert s.engine.stats.rerequests == 1
+
+
+def test_duplicated_items_do_not_multiply_traffic():
+    """Review finding: re-requesting on every stale duplicate started one more request/item
+    stream per duplicate. Every item arriving twice must cost one request per item."""
+    s = server()
+    items = plan(20)
+    out = s.feed(count(20))
+    for _ in range(20):
+        seq = out[-1].seq
+        out = s.feed(item_int(items[seq]))
+        s.feed(item_int(items[seq]))          # the network duplicates every item
+    assert list(s.engine.store.items(T.MISSION)) == items
+    requests = [msg for _, msg in s.sent_at if msg.get_type() == "MISSION_REQUEST_INT"]
+    assert len(requests) == 20
+
+
+def test_a_gcs_sending_the_wrong_item_forever_cannot_hold_the_transfer():
+    """Out-of-sequence items neither move the deadline nor reset the retries: the upload
+    ends after the usual retries, and another GCS is served afterwards."""
+    s = server()
+    s.feed(count(3))
+    for _ in range(100):
+        s.feed(item_int(waypoint(2)))        # always the wrong item, every 100 ms
+        s.advance(0.1)
+        if s.engine.is_idle():
+            break
+    assert s.engine.is_idle() and s.now < 2.0
+    assert acks(s.feed(count(1), OTHER_GCS)) == []   # a plain request: served, not DENIED
 
 
 def test_item_timeout_retries_five_times_at_250ms_then_cancels_and_keeps_old_plan():
@@ -383,6 +412,17 @@ def test_lost_final_ack_is_recovered_by_reacking_the_same_last_item():
     # but not for another GCS, nor for an item that is not the accepted last one
     assert acks(s.feed(item_int(items[-1]), OTHER_GCS)) == [(R.OPERATION_CANCELLED, T.MISSION)]
     assert acks(s.feed(item_int(replace(items[-1], z=99.0)))) == [(R.OPERATION_CANCELLED, T.MISSION)]
+
+
+def test_a_new_upload_ends_the_lost_ack_recovery_of_the_previous_one():
+    """Review finding: after a new MISSION_COUNT, a late item equal to one of the previous
+    plan's must not draw ACCEPTED (the GCS would report success for a plan not stored)."""
+    s = server()
+    first = plan(3)
+    upload(s, first)
+    s.feed(count(3))                             # the next upload starts, then is abandoned
+    s.advance(5)
+    assert acks(s.feed(item_int(first[2]))) == [(R.OPERATION_CANCELLED, T.MISSION)]
 
 
 def test_stray_items_and_requests_in_idle_get_an_error_and_acks_get_silence():
