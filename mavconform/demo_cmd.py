@@ -14,11 +14,11 @@ import time
 from reference_impl.files import SAMPLES_DIR, load_plan, plan_types_in
 from reference_impl.gcs import GcsNode
 from reference_impl.mission.items import MissionType, renumber
-from reference_impl.net import FaultModel, McapCapture, MonotonicClock, UdpDriver
+from reference_impl.net import FaultModel, MonotonicClock, UdpDriver
 from reference_impl.session import GcsSession, TargetUnresponsive
 from reference_impl.vehicle import VehicleNode
 
-from .options import probability
+from .options import capture_to, probability
 
 DEFAULT_PLAN = SAMPLES_DIR / "demo.plan"
 
@@ -49,33 +49,29 @@ def run(args: argparse.Namespace) -> int:
         vehicle_at = driver.add_node(vehicle, bind=("127.0.0.1", 0), outgoing=faults, incoming=faults)
         gcs = GcsNode(remote=vehicle_at, wall_clock=clock.wall)
         gcs_at = driver.add_node(gcs, bind=("127.0.0.1", 0))
-        capture = McapCapture(args.capture) if args.capture else None
-        if capture is not None:
-            driver.add_capture(capture)
-        print(f"vehicle on udp:{vehicle_at[0]}:{vehicle_at[1]}, GCS on udp:{gcs_at[0]}:{gcs_at[1]}; "
-              f"vehicle link: loss {args.loss:g}, dup {args.dup:g}, reorder {args.reorder:g} each way (seed {args.seed})")
-        session = GcsSession(driver, gcs)
-        try:
-            session.wait_for_target(10.0)
-        except TargetUnresponsive as exc:
-            print(f"FAIL {exc}")
-            return 1
-        for t in types:
-            r = session.upload(t, plan.items(t))
-            rows.append((f"upload {t.label} ({len(plan.items(t))} items)", r.ok, _cost(r)))
-        for t in types:
-            r = session.download(t)
-            want = tuple(renumber(plan.items(t), t))
-            same = r.ok and r.items == want
-            rows.append((f"download {t.label} equals upload", same, _cost(r) if r.ok else r.summary()))
-        r = session.clear(MissionType.ALL)
-        rows.append(("clear all", r.ok, _cost(r)))
-        for t in types:
-            r = session.download(t)
-            rows.append((f"{t.label} empty after clear", r.ok and r.items == (), _cost(r)))
-        stats = driver.stats
-        if capture is not None:
-            capture.close()
+        with capture_to(driver, args.capture):   # after the binds: a bad address leaves no file
+            print(f"vehicle on udp:{vehicle_at[0]}:{vehicle_at[1]}, GCS on udp:{gcs_at[0]}:{gcs_at[1]}; "
+                  f"vehicle link: loss {args.loss:g}, dup {args.dup:g}, reorder {args.reorder:g} each way (seed {args.seed})")
+            session = GcsSession(driver, gcs)
+            try:
+                session.wait_for_target(10.0)
+            except TargetUnresponsive as exc:
+                print(f"FAIL {exc}")
+                return 1
+            for t in types:
+                r = session.upload(t, plan.items(t))
+                rows.append((f"upload {t.label} ({len(plan.items(t))} items)", r.ok, _cost(r)))
+            for t in types:
+                r = session.download(t)
+                want = tuple(renumber(plan.items(t), t))
+                same = r.ok and r.items == want
+                rows.append((f"download {t.label} equals upload", same, _cost(r) if r.ok else r.summary()))
+            r = session.clear(MissionType.ALL)
+            rows.append(("clear all", r.ok, _cost(r)))
+            for t in types:
+                r = session.download(t)
+                rows.append((f"{t.label} empty after clear", r.ok and r.items == (), _cost(r)))
+            stats = driver.stats
     width = max(len(name) for name, _, _ in rows)
     for name, ok, note in rows:
         print(f"  {'ok  ' if ok else 'FAIL'}  {name:<{width}}  {note}")

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import sys
 import ipaddress
+import sys
 from typing import Iterator
 
 from reference_impl.files import Plan, check_writable, load_plan, plan_from_items, plan_types_in, save_plan
@@ -13,10 +13,10 @@ from reference_impl.gcs import GcsConfig, GcsNode
 from reference_impl.mission.items import MissionType
 from reference_impl.mission.results import OperationResult
 from reference_impl.mission.timing import Timings
-from reference_impl.net import McapCapture, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
+from reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
 from reference_impl.session import GcsSession, TargetUnresponsive
 
-from .options import mavlink_id, positive, seq_number
+from .options import capture_to, mavlink_id, positive, seq_number
 
 DESCRIPTION = """\
 Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
@@ -110,15 +110,9 @@ def _session(args: argparse.Namespace, target: UdpUri) -> Iterator[GcsSession]:
     gcs = GcsNode(config, remote=remote, wall_clock=clock.wall)
     bind = target.address if target.mode == "udpin" else (_local_for(target.host), 0)
     with UdpDriver(clock=clock) as driver:
-        driver.add_node(gcs, bind=bind)
-        capture = McapCapture(args.capture) if args.capture else None
-        if capture is not None:
-            driver.add_capture(capture)
-        try:
+        driver.add_node(gcs, bind=bind)   # bind first: a bad address leaves no capture file
+        with capture_to(driver, args.capture):
             yield GcsSession(driver, gcs)
-        finally:
-            if capture is not None:
-                capture.close()
 
 
 def _local_for(host: str) -> str:

@@ -1,13 +1,16 @@
-"""Options shared by several commands: link faults, and checked numeric arguments.
+"""What several commands share: checked numeric arguments, link faults, MCAP capture.
 
-Every bad value becomes a one-line `UsageError` naming the option, so the CLI can exit 2.
+A bad value raises argparse's ArgumentTypeError, which the parser turns into one line
+naming the option, and exit code 2.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+from typing import Any, Iterator
 
-from reference_impl.net import FaultModel, parse_drop_rule
+from reference_impl.net import FaultModel, McapCapture, parse_drop_rule
 
 
 def _number(text: str) -> float:
@@ -38,24 +41,22 @@ def positive(text: str) -> float:
     return value
 
 
-def mavlink_id(text: str) -> int:
+def _whole(text: str, low: int, high: int, what: str) -> int:
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if not 1 <= value <= 255:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a MAVLink id in 1..255")
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what} in {low}..{high}")
     return value
+
+
+def mavlink_id(text: str) -> int:
+    return _whole(text, 1, 255, "a MAVLink id")
 
 
 def seq_number(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if not 0 <= value <= 0xFFFF:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a mission item number in 0..65535")
-    return value
+    return _whole(text, 0, 0xFFFF, "a mission item number")
 
 
 def add_fault_options(parser: argparse.ArgumentParser) -> None:
@@ -92,3 +93,18 @@ def describe_faults(args: argparse.Namespace) -> str:
     parts += [f"drop {rule}" for rule in args.drop]
     return ", ".join(parts) if parts else "none"
 
+
+
+@contextlib.contextmanager
+def capture_to(driver: Any, path: str | None) -> Iterator[None]:
+    """Record every datagram the driver moves into an MCAP file at `path` (if given), and
+    close the file however the block ends, so a capture is never left unreadable."""
+    if path is None:
+        yield
+        return
+    capture = McapCapture(path)
+    driver.add_capture(capture)
+    try:
+        yield
+    finally:
+        capture.close()

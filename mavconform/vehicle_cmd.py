@@ -7,10 +7,10 @@ import sys
 
 from reference_impl.mission.behaviour import ServerBehaviour
 from reference_impl.mission.items import MissionType
-from reference_impl.net import MonotonicClock, UdpDriver, McapCapture, parse_udp_uri
+from reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
 from reference_impl.vehicle import VehicleConfig, VehicleNode
 
-from .options import add_fault_options, describe_faults, fault_model, mavlink_id, positive, seq_number
+from .options import add_fault_options, capture_to, describe_faults, fault_model, mavlink_id, positive, seq_number
 
 DESCRIPTION = """\
 Serve the spec-exact reference vehicle on UDP until interrupted (or --duration).
@@ -61,23 +61,23 @@ def run(args: argparse.Namespace) -> int:
         address = driver.add_node(vehicle, bind=listen.address, outgoing=faults, incoming=faults)
         if connect is not None:
             vehicle.endpoint.add_address(connect.address)
-        capture = McapCapture(args.capture) if args.capture else None
-        if capture is not None:
-            driver.add_capture(capture)
-        print(f"reference vehicle {args.system}/{args.component} listening on udp:{address[0]}:{address[1]} "
-              f"(faults: {describe_faults(args)})", flush=True)
-        end = None if args.duration is None else clock.now() + args.duration
-        try:
-            while end is None or clock.now() < end:
-                step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))
-                driver.run_until(lambda: bool(vehicle.events), timeout=step)
-                for event in vehicle.events:
-                    if not args.quiet:
-                        print(event, flush=True)
-                vehicle.events.clear()
-        except KeyboardInterrupt:
-            print("stopped", file=sys.stderr)
-        finally:
-            if capture is not None:
-                capture.close()
+        with capture_to(driver, args.capture):   # after the bind: a bad address leaves no file
+            print(f"reference vehicle {args.system}/{args.component} listening on "
+                  f"udp:{address[0]}:{address[1]} (faults: {describe_faults(args)})", flush=True)
+            _serve(driver, vehicle, clock, args)
     return 0
+
+
+def _serve(driver: UdpDriver, vehicle: VehicleNode, clock: MonotonicClock, args: argparse.Namespace) -> None:
+    """Run until --duration (or Ctrl-C), printing the vehicle's plan events as they happen."""
+    end = None if args.duration is None else clock.now() + args.duration
+    try:
+        while end is None or clock.now() < end:
+            step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))
+            driver.run_until(lambda: bool(vehicle.events), timeout=step)
+            for event in vehicle.events:
+                if not args.quiet:
+                    print(event, flush=True)
+            vehicle.events.clear()
+    except KeyboardInterrupt:
+        print("stopped", file=sys.stderr)

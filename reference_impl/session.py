@@ -11,7 +11,7 @@ from typing import Any, Callable, Protocol, Sequence
 
 from .errors import LocalProtocolError
 from .gcs import GcsNode
-from .mission.items import PLAN_TYPES, MissionItem, MissionType
+from .mission.items import MissionItem, MissionType
 from .mission.results import Operation, OperationResult
 
 

@@ -14,7 +14,7 @@ import math
 import struct
 from dataclasses import dataclass, replace
 from enum import IntEnum
-from typing import Iterable, Sequence
+from typing import Iterable
 
 
 class MissionType(IntEnum):

@@ -6,12 +6,11 @@ of extension fields (mission_type, opaque_id) are written down once.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from ..wire.dialect import mavlink as _d
 from .constants import Cmd
-from .items import PLAN_TYPE_BY_VALUE, MissionItem, MissionType, to_float32
+from .items import PLAN_TYPE_BY_VALUE, MissionItem, MissionType
 
 ITEM_INT = "MISSION_ITEM_INT"
 ITEM_FLOAT = "MISSION_ITEM"

@@ -18,7 +18,6 @@ from hypothesis import strategies as st
 
 from reference_impl.gcs import GcsNode
 from reference_impl.mission.items import PLAN_TYPES, MissionType as T, renumber
-from reference_impl.mission.results import Operation
 from reference_impl.mission.transitions import SlotState
 from reference_impl.net import FaultModel, SimNetwork
 from reference_impl.session import GcsSession
