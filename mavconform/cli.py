@@ -11,7 +11,7 @@ import sys
 
 from reference_impl.errors import LocalProtocolError, UsageError
 
-from . import __version__, demo_cmd, gcs_cmd, vehicle_cmd
+from . import __version__, clauses_cmd, demo_cmd, gcs_cmd, report_cmd, run_cmd, vehicle_cmd
 
 EXIT_USAGE = 2
 
@@ -30,6 +30,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"mavconform {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
                                 parser_class=_Parser)
+    run_cmd.add_parser(sub)
+    clauses_cmd.add_parser(sub)
+    report_cmd.add_parser(sub)
     vehicle_cmd.add_parser(sub)
     gcs_cmd.add_parser(sub)
     demo_cmd.add_parser(sub)

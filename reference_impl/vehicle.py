@@ -47,12 +47,13 @@ class VehicleNode:
     """Reference vehicle as a sans-IO datagram node."""
 
     def __init__(self, config: VehicleConfig | None = None, *,
-                 wall_clock: Callable[[], float] = time.time) -> None:
+                 wall_clock: Callable[[], float] = time.time,
+                 server_class: type[MissionServer] = MissionServer) -> None:
         self.config = cfg = config or VehicleConfig()
         self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
                                         signing=cfg.signing, require_signature=cfg.require_signature,
                                         wall_clock=wall_clock)
-        self.server = MissionServer(cfg.system, cfg.component, cfg.behaviour)
+        self.server = server_class(cfg.system, cfg.component, cfg.behaviour)
         self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed)
         self.frames_received = 0
         self.events: list[str] = []   # human-readable log of plan changes, for the CLI

@@ -1,0 +1,60 @@
+"""Which outcomes fail a run: expectations applied, strictness, and baseline regressions.
+
+Default: a run fails on any unexpected `fail` of a MUST or MAY clause (a MAY behaviour the
+target has but does wrong), or on `error` (undecided because the target went silent or a
+precondition broke). SHOULD failures fail the run only with `--strict`. With a baseline,
+only regressions fail it: a clause that passed in the baseline and now fails or errs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .catalogue import BY_ID
+from .clause import Level
+from .expectations import Deviation
+from .outcome import ClauseResult, Outcome
+
+NO_LONGER = "deviation no longer observed"
+
+
+def apply_expectations(results: list[ClauseResult], expected: dict[str, Deviation]) -> None:
+    for r in results:
+        dev = expected.get(r.clause_id)
+        if dev is None:
+            continue
+        r.expectation = dev.describe()
+        if r.outcome is Outcome.FAIL:
+            r.outcome = Outcome.KNOWN_DEVIATION
+        elif r.outcome is Outcome.PASS:
+            r.detail = f"{NO_LONGER} (expected to fail: {dev.describe()})"
+
+
+def gates(result: ClauseResult, *, strict: bool) -> bool:
+    if result.outcome is Outcome.ERROR:
+        return True
+    if result.outcome is not Outcome.FAIL:
+        return False
+    return strict or BY_ID[result.clause_id].level is not Level.SHOULD
+
+
+def baseline_outcomes(doc: dict[str, Any]) -> dict[str, str]:
+    return {c["id"]: c["outcome"] for c in doc["clauses"]}
+
+
+def gate(results: list[ClauseResult], *, strict: bool,
+         baseline: dict[str, str] | None) -> tuple[dict[str, bool], dict[str, Any]]:
+    """Per clause: does it fail the run; and the gating summary for the report."""
+    if baseline is None:
+        flags = {r.clause_id: gates(r, strict=strict) for r in results}
+        return flags, {"mode": "strict" if strict else "default", "regressions": [], "fixed": []}
+    regressions, fixed, flags = [], [], {}
+    for r in results:
+        before = baseline.get(r.clause_id)
+        regressed = before == "pass" and r.outcome in (Outcome.FAIL, Outcome.ERROR)
+        flags[r.clause_id] = regressed
+        if regressed:
+            regressions.append(r.clause_id)
+        elif before is not None and before != "pass" and r.outcome is Outcome.PASS:
+            fixed.append(r.clause_id)
+    return flags, {"mode": "baseline", "regressions": regressions, "fixed": fixed}

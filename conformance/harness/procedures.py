@@ -1,0 +1,161 @@
+"""Whole operations done the cooperative way, for setting up and checking state.
+
+A check scripts the exchange its clause is about message by message; everything around
+it (put a known plan on the target first, read the plan back after) goes through these
+helpers, which behave like a careful GCS: spec timeouts, up to 5 resends, every loop
+bounded. When one of them cannot finish, the clause is undecided (`PreconditionFailed`),
+not failed: the clause that owns that behaviour is where it gets judged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from reference_impl.mission import messages as m
+from reference_impl.mission.constants import MissionResult
+from reference_impl.mission.items import MissionItem, MissionType
+from reference_impl.wire.frame import Frame
+
+from ..outcome import ClauseFailed, PreconditionFailed
+from .match import ack, msg, request
+from .tester import Tester
+
+RETRIES = 5
+
+
+@dataclass
+class Download:
+    count: int
+    items: list[MissionItem]
+    count_frame: Frame
+
+
+def result_name(code: int) -> str:
+    try:
+        return f"MAV_MISSION_{MissionResult(code).name}"
+    except ValueError:
+        return f"MAV_MISSION_RESULT {code} (not a defined value)"
+
+
+def upload(t: Tester, items: list[MissionItem], mission_type: MissionType, *,
+           as_int: bool = True) -> Frame | None:
+    """Upload `items`; the vehicle's final MISSION_ACK (any code), or None if it never came."""
+    mt = int(mission_type)
+    t.mark()
+    t.send(m.count_message(len(items), mission_type, t.target))
+    reply = request(mission_type=mt) | ack(mission_type=mt)
+    resends = 0
+    answered = 0
+    for _ in range((len(items) + 2) * (RETRIES + 2)):   # bounded: every round answers or resends
+        frame = t.poll_for(reply, t.timings.default_timeout)
+        if frame is None:
+            if resends >= RETRIES:
+                return None
+            resends += 1
+            if answered == 0:
+                t.send(m.count_message(len(items), mission_type, t.target))
+            continue
+        if frame.msg._type == "MISSION_ACK":
+            return frame
+        seq = frame.msg.seq
+        if not 0 <= seq < len(items):
+            continue
+        answered += 1
+        t.send(m.item_message(items[seq], t.target, as_int=as_int))
+    return None
+
+
+def ensure_plan(t: Tester, items: list[MissionItem], mission_type: MissionType) -> None:
+    """Put `items` on the target as its `mission_type` plan, or make the clause undecided."""
+    frame = upload(t, items, mission_type)
+    if frame is None:
+        raise PreconditionFailed(f"setup: uploading a {len(items)}-item {mission_type.label} plan "
+                                 "got no MISSION_ACK")
+    if frame.msg.type != MissionResult.ACCEPTED:
+        raise PreconditionFailed(f"setup: uploading a {len(items)}-item {mission_type.label} plan "
+                                 f"was answered {result_name(frame.msg.type)}")
+
+
+def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Download | None:
+    """Read the `mission_type` plan back; None if the target did not complete the download."""
+    mt = int(mission_type)
+    t.mark()
+    count_frame = None
+    for _ in range(RETRIES + 1):
+        t.send(m.request_list_message(mission_type, t.target))
+        count_frame = t.poll_for(msg("MISSION_COUNT", mission_type=mt), t.timings.default_timeout)
+        if count_frame is not None:
+            break
+    if count_frame is None:
+        return None
+    count = count_frame.msg.count
+    items: list[MissionItem] = []
+    want = "MISSION_ITEM_INT" if as_int else "MISSION_ITEM"
+    for seq in range(min(count, 5000)):
+        frame = None
+        for _ in range(RETRIES + 1):
+            t.send(m.request_message(seq, mission_type, t.target, as_int=as_int))
+            frame = t.poll_for(msg(want, seq=seq, mission_type=mt), t.timings.default_timeout)
+            if frame is not None:
+                break
+        if frame is None:
+            return None
+        item = m.item_from_message(frame.msg)
+        if item is None:
+            return None
+        items.append(item)
+    if count:
+        t.send(m.ack_message(MissionResult.ACCEPTED, mission_type, t.target))
+    return Download(count, items, count_frame)
+
+
+def stored(t: Tester, mission_type: MissionType) -> list[MissionItem]:
+    """The plan on the target, or the clause is undecided."""
+    got = download(t, mission_type)
+    if got is None:
+        raise PreconditionFailed(f"could not download the {mission_type.label} plan to check it")
+    return got.items
+
+
+def clear(t: Tester, mission_type: MissionType | int) -> Frame | None:
+    t.mark()
+    mt = int(mission_type)
+    for _ in range(RETRIES + 1):
+        t.send(m.clear_all_message(mission_type, t.target))
+        frame = t.poll_for(ack(mission_type=mt), t.timings.default_timeout)
+        if frame is not None:
+            return frame
+    return None
+
+
+def comparable(item: MissionItem) -> MissionItem:
+    """An item as a plan comparison sees it: `current` is the vehicle's progress marker on
+    download (seed 000 field table), not part of the plan."""
+    return replace(item, current=0)
+
+
+def same_plan(a: list[MissionItem], b: list[MissionItem]) -> bool:
+    return [comparable(x) for x in a] == [comparable(x) for x in b]
+
+
+def require_same_plan(got: list[MissionItem], want: list[MissionItem], what: str) -> None:
+    if not same_plan(got, want):
+        raise ClauseFailed(f"{what}: the target holds {len(got)} items, "
+                           f"{'a different plan' if len(got) == len(want) else f'expected {len(want)}'}"
+                           f"{_first_difference(got, want)}")
+
+
+def _first_difference(got: list[MissionItem], want: list[MissionItem]) -> str:
+    for g, w in zip(got, want):
+        g, w = comparable(g), comparable(w)
+        if g != w:
+            fields = [f for f in ("frame", "command", "param1", "param2", "param3", "param4", "x", "y",
+                                  "z", "autocontinue", "mission_type")
+                      if repr(getattr(g, f)) != repr(getattr(w, f))]
+            shown = ", ".join(f"{f} {_v(getattr(g, f))} (expected {_v(getattr(w, f))})" for f in fields)
+            return f" (first difference at seq {w.seq}: {shown})"
+    return ""
+
+
+def _v(value: object) -> str:
+    return str(int(value)) if isinstance(value, int) else repr(value)

@@ -1,0 +1,206 @@
+"""`Tester`: what a check holds. Send exactly what the script says; expect, with a bound.
+
+Every wait is bounded and ends on the event it waits for: `expect` returns the moment a
+matching frame arrives; only `expect_silence` and `collect` must sit out their whole
+window, and those windows are what the suite's forced-wait figure counts. All times a
+check passes are the protocol's own (spec defaults) and are stretched by `--time-scale`.
+
+Frames are matched from a floor (`mark()` moves it to "now") and a matched frame is
+consumed, so two `expect`s of the same request see the first copy and then the retry.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Protocol
+
+from reference_impl.mission.timing import Timings
+from reference_impl.wire.frame import Frame
+
+from ..outcome import ClauseFailed, TargetUnresponsive
+from .exchange import Exchange, message_fields, relevant
+from .match import Match
+from .tester_node import TesterNode
+
+SPEC = Timings()
+LIVENESS = 3.0   # s without any frame from the target, beyond which it is unresponsive
+
+
+class Driver(Protocol):
+    def run_until(self, condition: Callable[[], bool], *, timeout: float) -> bool: ...
+
+
+class Tester:
+    def __init__(self, node: TesterNode, driver: Any, *, scale: float = 1.0,
+                 timings: Timings = SPEC) -> None:
+        self.node = node
+        self.driver = driver
+        self.scale = scale
+        self.timings = timings
+        self.target: tuple[int, int] = node.target or (0, 0)
+        self.exchange: Exchange | None = None
+        self.forced_wait = 0.0
+        self._floor = 0
+        self._consumed: set[int] = set()   # ids of matched frames past the floor
+
+    # --- time -----------------------------------------------------------------------------
+    def now(self) -> float:
+        return self.driver.clock.now()
+
+    def scaled(self, seconds: float) -> float:
+        return seconds * self.scale
+
+    @property
+    def reply_timeout(self) -> float:
+        """The spec's default response timeout (1500 ms), scaled."""
+        return self.timings.default_timeout * self.scale
+
+    # --- script ---------------------------------------------------------------------------
+    def mark(self) -> None:
+        """Ignore everything received so far."""
+        self._floor = len(self.node.inbox)
+        self._consumed.clear()
+
+    def send(self, msg: Any) -> None:
+        self.node.send(msg)
+        self.driver.run_until(_always, timeout=0.0)   # flush it now, and take in what is waiting
+
+    def note(self, text: str) -> None:
+        if self.exchange is not None:
+            self.exchange.note(self.now(), self.node.name, text)
+
+    def expect(self, match: Match, within: float | None = None) -> Frame:
+        """The first unconsumed frame since the floor that matches, waiting at most `within`
+        seconds (default: the spec's 1500 ms), scaled. Fails the clause if none comes."""
+        within = self.reply_timeout if within is None else within * self.scale
+        found = self._find(match)
+        if found is None:
+            self.driver.run_until(lambda: self._find(match, peek=True) is not None, timeout=within)
+            found = self._find(match)
+        if found is None:
+            self.note(f"expected {match} within {within:g} s: nothing matching arrived")
+            self._check_alive()
+            raise ClauseFailed(f"expected {match} within {within:g} s; {self._last_seen()}")
+        return found
+
+    def poll_for(self, match: Match, within: float) -> Frame | None:
+        """Like `expect`, but None (not a failure) if nothing matching arrives."""
+        within *= self.scale
+        found = self._find(match)
+        if found is None:
+            self.driver.run_until(lambda: self._find(match, peek=True) is not None, timeout=within)
+            found = self._find(match)
+        return found
+
+    def expect_silence(self, match: Match, for_: float) -> None:
+        """Nothing matching may arrive for `for_` seconds (scaled); fails the clause if it does."""
+        seen = self.collect(match, for_, stop_at_first=True)
+        if seen:
+            t, frame = seen[0]
+            raise ClauseFailed(f"expected no {match} for {for_ * self.scale:g} s; got "
+                               f"{_describe(frame)} after {t:.3f} s")
+
+    def collect(self, match: Match, for_: float, *, stop_at_first: bool = False,
+                stop: Match | None = None, quiet: float | None = None) -> list[tuple[float, Frame]]:
+        """Every matching frame over a window of `for_` seconds (scaled), as (seconds since
+        the window opened, frame). The window closes early at the first frame matching
+        `stop` (which is consumed and included), or after `quiet` seconds (scaled) with no
+        matching frame once one has come. The window's length counts as forced waiting."""
+        start = self.now()
+        end = start + for_ * self.scale
+        quiet_s = None if quiet is None else quiet * self.scale
+        out: list[tuple[float, Frame]] = []
+
+        def take() -> bool:
+            for frame in self._take_all(match, stop):
+                out.append((self.now() - start, frame))
+            if out and stop is not None and stop(out[-1][1]):
+                return True
+            if stop_at_first and out:
+                return True
+            if quiet_s is not None and out and self.now() - start - out[-1][0] >= quiet_s:
+                return True
+            return self.now() >= end
+
+        for _ in range(1_000_000):   # each round waits until the next frame or deadline
+            if take():
+                break
+            wake = end if quiet_s is None or not out else min(end, start + out[-1][0] + quiet_s)
+            self.driver.run_until(lambda: self._pending(match, stop), timeout=max(0.0, wake - self.now()))
+        self.forced_wait += self.now() - start
+        if not out:
+            self._check_alive()
+        return out
+
+    # --- internals ------------------------------------------------------------------------
+    def _find(self, match: Match, *, peek: bool = False) -> Frame | None:
+        inbox, consumed = self.node.inbox, self._consumed
+        for i in range(self._floor, len(inbox)):
+            if i in consumed:
+                continue
+            frame = inbox[i][1]
+            if match(frame):
+                if not peek:
+                    consumed.add(i)
+                return frame
+        return None
+
+    def _pending(self, match: Match, stop: Match | None) -> bool:
+        return self._find(match, peek=True) is not None or (
+            stop is not None and self._find(stop, peek=True) is not None)
+
+    def _take_all(self, match: Match, stop: Match | None) -> list[Frame]:
+        out = []
+        inbox, consumed = self.node.inbox, self._consumed
+        for i in range(self._floor, len(inbox)):
+            if i in consumed:
+                continue
+            frame = inbox[i][1]
+            if match(frame) or (stop is not None and stop(frame)):
+                consumed.add(i)
+                out.append(frame)
+                if stop is not None and stop(frame):
+                    break
+        return out
+
+    def _check_alive(self) -> None:
+        heard = self.node.last_heard
+        if heard is None or self.now() - heard > LIVENESS * self.scale:
+            raise TargetUnresponsive(
+                "the target sent nothing at all" if heard is None
+                else f"the target has sent nothing for {self.now() - heard:.1f} s")
+
+    def _last_seen(self) -> str:
+        inbox = self.node.inbox
+        for i in range(len(inbox) - 1, self._floor - 1, -1):
+            frame = inbox[i][1]
+            if relevant(frame.msg._type):
+                return f"last mission message: {_describe(frame)}"
+        return "no mission message arrived"
+
+
+def _always() -> bool:
+    return True
+
+
+def _describe(frame: Frame) -> str:
+    fields = message_fields(frame.msg)
+    shown = ", ".join(f"{k}={v}" for k, v in fields.items()
+                      if k not in ("target_system", "target_component"))
+    return f"{frame.msg._type}{{{shown}}}"
+
+
+def record_traffic(tester: Tester) -> None:
+    """Route the node's sends and receipts into the tester's current exchange."""
+    node = tester.node
+
+    def on_frame(peer: str, now: float, frame: Frame) -> None:
+        ex = tester.exchange
+        if ex is not None and relevant(frame.msg._type):
+            ex.add(now, "rx", peer, frame.msg._type, message_fields(frame.msg))
+
+    def on_send(peer: str, msg: Any) -> None:
+        ex = tester.exchange
+        if ex is not None:
+            ex.add(tester.now(), "tx", peer, msg._type, message_fields(msg))
+
+    node.on_frame, node.on_send = on_frame, on_send

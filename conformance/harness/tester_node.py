@@ -1,0 +1,70 @@
+"""The tester's datagram node: a GCS that sends only what the script says.
+
+Besides the scripted messages it sends one thing by itself, a GCS HEARTBEAT at 1 Hz, as
+every MAVLink component must (seed 001, line 149) and as real autopilots need before they
+route to a new GCS. Every frame from the target is kept, with its arrival time, for the
+script's expectations; frames from anyone else (another tester, stray senders) are not.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+from reference_impl.endpoint import MavlinkEndpoint
+from reference_impl.net.node import Address
+from reference_impl.wire.dialect import mavlink as _d
+from reference_impl.wire.frame import Frame
+
+MAV_TYPE_GCS = 6
+MAV_AUTOPILOT_INVALID = 8
+HEARTBEAT_PERIOD = 1.0
+MAX_INBOX = 200_000          # a run's worth; older frames are dropped first past this
+
+
+class TesterNode:
+    """A `DatagramNode`. `target` (system, component) filters what is kept; until it is
+    known (discovery), every frame is kept."""
+
+    def __init__(self, name: str, system: int, component: int) -> None:
+        self.name = name
+        self.endpoint = MavlinkEndpoint(system, component)
+        self.target: tuple[int, int] | None = None
+        self.inbox: list[tuple[float, Frame]] = []
+        self.dropped = 0                 # frames dropped from the front of a full inbox
+        self.last_heard: float | None = None
+        self.on_frame: Callable[[str, float, Frame], None] | None = None
+        self.on_send: Callable[[str, Any], None] | None = None
+        self.heartbeats = True
+        self._next_heartbeat: float | None = 0.0
+
+    # --- DatagramNode ---------------------------------------------------------------------
+    def datagram_received(self, data: bytes, source: Address, now: float) -> None:
+        target = self.target
+        for frame in self.endpoint.receive(data, source):
+            if target is not None and (frame.src_system, frame.src_component) != target:
+                continue
+            self.last_heard = now
+            if len(self.inbox) >= MAX_INBOX:
+                del self.inbox[: MAX_INBOX // 10]
+                self.dropped += MAX_INBOX // 10
+            self.inbox.append((now, frame))
+            if self.on_frame is not None:
+                self.on_frame(self.name, now, frame)
+
+    def poll(self, now: float) -> None:
+        if self.heartbeats and self._next_heartbeat is not None and now >= self._next_heartbeat:
+            self._next_heartbeat = now + HEARTBEAT_PERIOD
+            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3))
+
+    def next_deadline(self) -> float | None:
+        return self._next_heartbeat if self.heartbeats else None
+
+    def take_outgoing(self) -> list[tuple[bytes, Address]]:
+        return self.endpoint.take_outgoing()
+
+    # --- scripted sending -----------------------------------------------------------------
+    def send(self, msg: Any) -> None:
+        """Queue `msg` for every known address of the target (the driver flushes it)."""
+        self.endpoint.send(msg)
+        if self.on_send is not None:
+            self.on_send(self.name, msg)

@@ -1,0 +1,162 @@
+"""Run clauses against a target and decide each one.
+
+Between clauses the runner puts the target back to rest: every tester sends
+OPERATION_CANCELLED for each plan type (a spec vehicle in idle ignores it; one left
+mid-transfer by the last check drops it), and the next check only looks at frames that
+arrive after it starts. Before the first clause the runner reads every plan the target
+holds; after the last it puts back any that changed, and says whether it could.
+A target that falls silent is reported, never waited on: once it has been silent past the
+liveness bound, the remaining clauses are marked `error` without being run.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+from reference_impl.mission import messages as m
+from reference_impl.mission.constants import MissionResult
+from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
+
+from .checks import CHECKS
+from .clause import Clause
+from .harness import procedures
+from .harness.exchange import Exchange
+from .outcome import (ClauseFailed, ClauseResult, NotApplicable, Outcome, PreconditionFailed,
+                      Skipped, TargetUnresponsive)
+from .session import Session
+
+OnResult = Callable[[Clause, ClauseResult], None]
+
+
+@dataclass
+class RunOutcome:
+    results: list[ClauseResult]
+    identity: dict | None
+    restore: dict
+    duration_s: float
+    forced_wait_s: float
+    unresponsive: str | None = None     # why the target was given up on, if it was
+    snapshot: dict[str, int] = field(default_factory=dict)
+
+
+def run_clauses(session: Session, clauses: Iterable[Clause], *,
+                on_result: OnResult | None = None, restore: bool = True) -> RunOutcome:
+    clauses = list(clauses)
+    started = time.monotonic()
+    results: list[ClauseResult] = []
+    try:
+        identity = session.discover()
+    except TargetUnresponsive as exc:
+        for clause in clauses:
+            result = ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}")
+            results.append(result)
+            if on_result:
+                on_result(clause, result)
+        return RunOutcome(results, None, {"status": "skipped", "detail": "the target never answered"},
+                          time.monotonic() - started, 0.0, unresponsive=str(exc))
+
+    snapshot = _snapshot(session) if restore else None
+    dead: str | None = None
+    for clause in clauses:
+        if dead is not None:
+            result = ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}")
+        else:
+            result = run_one(session, clause)
+            if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
+                if not _still_alive(session):
+                    dead = f"the target stopped answering during {clause.id}"
+        results.append(result)
+        if on_result:
+            on_result(clause, result)
+    restore_status = (_restore(session, snapshot) if snapshot is not None and dead is None else
+                      {"status": "skipped", "detail": "target unresponsive" if dead else "not asked"})
+    forced = sum(t.forced_wait for t in session.testers())
+    return RunOutcome(results, identity, restore_status, time.monotonic() - started, forced,
+                      unresponsive=dead)
+
+
+def run_one(session: Session, clause: Clause) -> ClauseResult:
+    fn = CHECKS.get(clause.id)
+    if fn is None:
+        return ClauseResult(clause.id, Outcome.ERROR, "no check is registered for this clause")
+    testers = session.testers()
+    exchange = Exchange(session.t.now())
+    for t in testers:
+        t.mark()
+    session.t.exchange = exchange
+    if session._second is not None:
+        session._second.exchange = exchange
+    begin = session.t.now()
+    session.current_clause = clause.id
+    try:
+        fn(session)
+        outcome, detail = Outcome.PASS, ""
+    except ClauseFailed as exc:
+        outcome, detail = Outcome.FAIL, str(exc)
+    except NotApplicable as exc:
+        outcome, detail = Outcome.NOT_APPLICABLE, str(exc)
+    except Skipped as exc:
+        outcome, detail = Outcome.SKIPPED, str(exc)
+    except PreconditionFailed as exc:
+        outcome, detail = Outcome.ERROR, f"precondition: {exc}"
+    except TargetUnresponsive as exc:
+        outcome, detail = Outcome.ERROR, f"target unresponsive: {exc}"
+    except Exception as exc:   # a bug in the check: ours, never the target's failure
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        outcome, detail = Outcome.ERROR, (f"internal error in check {fn.__name__}: "
+                                          f"{type(exc).__name__}: {exc} ({where.filename}:{where.lineno})")
+    crash = session.guard.crash if session.guard is not None else None
+    if crash is not None and outcome is not Outcome.PASS and "crashed" not in detail:
+        outcome, detail = Outcome.ERROR, f"target unresponsive: the in-process vehicle crashed: {crash}"
+    end = session.t.now()
+    events = exchange.finish(end)
+    for t in session.testers():
+        t.exchange = None
+    _settle(session)
+    return ClauseResult(clause.id, outcome, detail, round(end - begin, 6), events)
+
+
+def _settle(session: Session) -> None:
+    """Leave the target idle for the next clause."""
+    for t in session.testers():
+        for mt in PLAN_TYPES:
+            t.node.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mt, t.target))
+    session.driver.run_until(lambda: False, timeout=0.0)
+
+
+def _still_alive(session: Session) -> bool:
+    node = session.t.node
+    heard = node.last_heard
+    session.driver.run_until(lambda: node.last_heard != heard, timeout=2.5 * session.scale)
+    return node.last_heard != heard
+
+
+def _snapshot(session: Session) -> dict[MissionType, list[MissionItem]] | None:
+    plans = {}
+    for mt in PLAN_TYPES:
+        got = procedures.download(session.t, mt)
+        if got is None:
+            return None if mt is MissionType.MISSION else plans   # types it lacks: not ours to restore
+        plans[mt] = got.items
+    return plans
+
+
+def _restore(session: Session, snapshot: dict[MissionType, list[MissionItem]]) -> dict:
+    t = session.t
+    restored, failed = [], []
+    for mt, items in snapshot.items():
+        now = procedures.download(t, mt)
+        if now is not None and procedures.same_plan(now.items, items):
+            continue
+        frame = procedures.upload(t, items, mt) if items else procedures.clear(t, mt)
+        ok = frame is not None and frame.msg.type == MissionResult.ACCEPTED
+        (restored if ok else failed).append(f"{mt.label} ({len(items)} items)")
+    if failed:
+        return {"status": "failed", "detail": "could not put back: " + ", ".join(failed)}
+    if restored:
+        return {"status": "restored", "detail": "put back what the target held before the run: "
+                + ", ".join(restored)}
+    return {"status": "unchanged", "detail": "the target holds the plans it held before the run"}

@@ -1,0 +1,191 @@
+"""An open connection to a target: the driver, the testers, and what we learned about it.
+
+In-process targets (`builtin:`, `mutant:`) put our vehicle node on the same driver as the
+tester, so one single-threaded loop serves both ends: over real UDP loopback sockets by
+default, or over `SimNetwork` in virtual time (`virtual=True`, used by the suite's own
+negative-control tests, where thousands of protocol seconds cost milliseconds).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+from reference_impl.net.guard import GuardedNode
+from reference_impl.net.sim import CaptureHook, SimNetwork
+from reference_impl.net.udp import UdpDriver
+from reference_impl.vehicle import VehicleConfig, VehicleNode
+
+from .harness.tester import Tester, record_traffic
+from .harness.tester_node import MAV_AUTOPILOT_INVALID, MAV_TYPE_GCS, TesterNode
+from .outcome import TargetUnresponsive
+from .target_uri import TargetUri
+
+TESTER_SYSTEM, TESTER2_SYSTEM, TESTER_COMPONENT = 245, 246, 190   # 190: MAV_COMP_ID_MISSIONPLANNER
+DISCOVERY_TIMEOUT = 5.0   # s for the first HEARTBEAT (heartbeats are 1 Hz), scaled
+
+
+def build_vehicle(uri: TargetUri) -> VehicleNode:
+    if uri.kind == "mutant":
+        from .mutants import MUTANTS
+        return MUTANTS[uri.name].build(VehicleConfig())
+    return VehicleNode(VehicleConfig())
+
+
+class Session:
+    """What a check receives. `t` is the scripted GCS; `second()` a second GCS."""
+
+    def __init__(self, uri: TargetUri, *, scale: float = 1.0, virtual: bool = False,
+                 seed: int = 0, allow_flight: bool | None = None,
+                 capture: CaptureHook | None = None) -> None:
+        self.uri = uri
+        self.scale = scale
+        self.virtual = virtual
+        self.allow_flight = uri.in_process if allow_flight is None else allow_flight
+        self.cache: dict[str, Any] = {}        # observations several clauses share
+        self.current_clause = ""
+        self.identity: dict[str, Any] | None = None
+        self.vehicle: VehicleNode | None = None
+        self.guard: GuardedNode | None = None   # an in-process vehicle that raises stops here
+        self.target_address: Any = None
+        self._second: Tester | None = None
+        node = TesterNode("tester", TESTER_SYSTEM, TESTER_COMPONENT)
+        if virtual:
+            if not uri.in_process:
+                raise ValueError("virtual time needs an in-process target")
+            self.driver: Any = SimNetwork(seed)
+            self.vehicle = build_vehicle(uri)
+            self.guard = GuardedNode(self.vehicle)
+            self.driver.add_node("vehicle", self.guard)
+            self.driver.add_node("tester", node)
+            self.driver.connect("tester", "vehicle")
+            self.target_address = "vehicle"
+            node.endpoint.add_address("vehicle")
+        else:
+            self.driver = UdpDriver(seed=seed)
+            try:
+                if uri.in_process:
+                    self.vehicle = build_vehicle(uri)
+                    self.guard = GuardedNode(self.vehicle)
+                    self.target_address = self.driver.add_node(self.guard)
+                    self.driver.add_node(node)
+                    node.endpoint.add_address(self.target_address)
+                elif uri.kind == "udp":
+                    self.driver.add_node(node)
+                    self.target_address = uri.udp.address
+                    node.endpoint.add_address(self.target_address)
+                else:  # udpin: the target finds us
+                    self.driver.add_node(node, bind=uri.udp.address)
+            except BaseException:
+                self.driver.close()
+                raise
+        if capture is not None:
+            self.driver.add_capture(capture)
+        self.t = Tester(node, self.driver, scale=scale)
+        record_traffic(self.t)
+
+    # --- lifecycle ------------------------------------------------------------------------
+    def discover(self, timeout: float = DISCOVERY_TIMEOUT) -> dict[str, Any]:
+        """Wait for the target's HEARTBEAT; its ids become the testers' target."""
+        node = self.t.node
+        found: list[Any] = []
+
+        def heartbeat() -> bool:
+            for _, frame in node.inbox:
+                msg = frame.msg
+                if msg._type == "HEARTBEAT" and msg.type != MAV_TYPE_GCS \
+                        and msg.autopilot != MAV_AUTOPILOT_INVALID:
+                    found.append(frame)
+                    return True
+            return False
+
+        wait = timeout * self.scale
+        if not self.driver.run_until(heartbeat, timeout=wait):
+            where = self.uri
+            raise TargetUnresponsive(f"no HEARTBEAT from {where} within {wait:g} s "
+                                     "(is it running, and is the address right?)")
+        frame = found[0]
+        node.target = (frame.src_system, frame.src_component)
+        node.inbox = [(t, f) for t, f in node.inbox if (f.src_system, f.src_component) == node.target]
+        node.last_heard = self.t.now()
+        if self.target_address is None:
+            self.target_address = node.endpoint.peers.get(node.target)
+        self.t.target = node.target
+        msg = frame.msg
+        self.identity = {
+            "system": frame.src_system, "component": frame.src_component, "type": msg.type,
+            "autopilot": msg.autopilot, "mavlink_version": frame.version,
+            "address": _label(self.target_address)}
+        return self.identity
+
+    def second(self) -> Tester:
+        """A second GCS (another system id, its own socket), created on first use."""
+        if self._second is None:
+            node = TesterNode("tester2", TESTER2_SYSTEM, TESTER_COMPONENT)
+            node.target = self.t.node.target
+            if self.virtual:
+                self.driver.add_node("tester2", node)
+                self.driver.connect("tester2", "vehicle")
+            else:
+                self.driver.add_node(node)
+            node.endpoint.add_address(self.target_address)
+            tester = Tester(node, self.driver, scale=self.scale)
+            tester.exchange = self.t.exchange
+            record_traffic(tester)
+            self._second = tester
+            # announce it (a HEARTBEAT), so the target learns where tester2 lives
+            node.poll(self.t.now())
+            self.driver.run_until(_always, timeout=0.0)
+        return self._second
+
+    def shared(self, key: str, observe: Callable[[], Any]) -> Any:
+        """An observation several clauses decide from (e.g. one silent upload serves the
+        retry count, the retry interval and the give-up clauses): made once per run, and
+        its exchange copied into every clause that uses it, so each keeps its evidence."""
+        exchange = self.t.exchange
+        if key in self.cache:
+            value, events, owner = self.cache[key]
+            if exchange is not None:
+                exchange.note(self.t.now(), "tester", f"the exchange below was recorded for {owner} "
+                              "and is shared with this clause (times are from that clause)")
+                exchange.events.extend(events)
+            return value
+        first = len(exchange.events) if exchange is not None else 0
+        value = observe()
+        events = list(exchange.events[first:]) if exchange is not None else []
+        self.cache[key] = (value, events, self.current_clause)
+        return value
+
+    def testers(self) -> list[Tester]:
+        return [self.t] + ([self._second] if self._second is not None else [])
+
+    def run_for(self, seconds: float) -> None:
+        self.driver.run_until(_never, timeout=seconds * self.scale)
+
+    def close(self) -> None:
+        if not self.virtual:
+            self.driver.close()
+
+    def __enter__(self) -> "Session":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _never() -> bool:
+    return False
+
+
+def _always() -> bool:
+    return True
+
+
+def _label(address: Any) -> str | None:
+    if address is None:
+        return None
+    if isinstance(address, tuple):
+        return f"{address[0]}:{address[1]}"
+    return str(address)
+
+
+SessionFactory = Callable[[], Session]

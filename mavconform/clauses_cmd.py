@@ -1,0 +1,49 @@
+"""`mavconform clauses`: list the clauses the suite decides (and the mutants that break them).
+
+Each line: id, level, role, title, and where the requirement comes from. Filter with
+--clauses (comma-separated globs) and --level. --mutants lists the negative controls:
+reference vehicles with one behaviour broken, usable as targets (`mutant:NAME`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from conformance import catalogue
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("clauses", help="list the clauses (or the mutant vehicles)",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--clauses", metavar="GLOB", help="comma-separated id globs, e.g. 'MIS.UP.*'")
+    p.add_argument("--level", metavar="LEVELS", help="only these levels, e.g. MUST or SHOULD,MAY")
+    p.add_argument("--requirement", action="store_true", help="print each requirement sentence too")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--mutants", action="store_true", help="list the mutant vehicles instead")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    chosen = catalogue.select(args.clauses, args.level)
+    if args.mutants:
+        from conformance.mutants import MUTANTS
+        wanted = {c.id for c in chosen}
+        rows = [mu for mu in MUTANTS.values() if mu.breaks & wanted]
+        if args.json:
+            print(json.dumps([{"name": mu.name, "description": mu.description,
+                               "breaks": sorted(mu.breaks)} for mu in rows], indent=2))
+            return 0
+        for mu in rows:
+            print(f"mutant:{mu.name:<28} {mu.description}\n{'':<36} breaks {', '.join(sorted(mu.breaks))}")
+        return 0
+    if args.json:
+        print(json.dumps([{"id": c.id, "level": c.level.value, "role": c.role.value, "title": c.title,
+                           "source": c.source, "requirement": c.requirement} for c in chosen], indent=2))
+        return 0
+    for c in chosen:
+        print(f"{c.id:<11} {c.level.value:<6} {c.role.value:<7} {c.title}  [{c.source}]")
+        if args.requirement:
+            print(f"{'':<27}\"{c.requirement}\"")
+    print(f"{len(chosen)} clauses")
+    return 0

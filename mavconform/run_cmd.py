@@ -1,0 +1,103 @@
+"""`mavconform run`: the conformance suite against a target, clause by clause.
+
+Prints one line per clause as it is decided (the requirement and the reason under every
+clause that did not pass), then a summary, and writes run.json, run.junit.xml, run.md,
+run.html and run.mcap to the report folder.
+
+Exit codes: 0 every clause passed or is a known deviation (SHOULD failures count only with
+--strict); 1 a clause failed unexpectedly, could not be decided, or the target did not
+answer (with --baseline: only a clause that passed in the baseline and does not now);
+2 a usage mistake.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import textwrap
+from typing import Any
+
+from conformance import document, suite
+from conformance.clause import Clause
+from conformance.outcome import ClauseResult, Outcome
+from conformance.target_uri import FORMS
+
+from .options import positive
+
+MARK = {Outcome.PASS: "PASS", Outcome.FAIL: "FAIL", Outcome.KNOWN_DEVIATION: "KNOWN",
+        Outcome.NOT_APPLICABLE: "N/A", Outcome.SKIPPED: "SKIP", Outcome.ERROR: "ERROR"}
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("run", help="run the conformance suite against a target",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--target", default="builtin:spec", metavar="URI",
+                   help=f"what to test: {FORMS} (default builtin:spec: our reference vehicle "
+                        "over UDP loopback)")
+    p.add_argument("--clauses", default="*", metavar="GLOB",
+                   help="clause ids to run, comma-separated globs, e.g. 'MIS.UP.*,MIS.CLR.0?' (default all)")
+    p.add_argument("--level", metavar="LEVELS", help="only these levels, e.g. MUST or MUST,SHOULD")
+    p.add_argument("--strict", action="store_true", help="SHOULD failures fail the run too")
+    p.add_argument("--expect", metavar="NAME|FILE",
+                   help="expectations file (or bundled name) listing known deviations")
+    p.add_argument("--baseline", metavar="RUN.json",
+                   help="fail only on regressions: clauses that passed in this earlier run.json")
+    p.add_argument("--report-dir", default="reports/out", metavar="DIR",
+                   help="where the reports go (default reports/out)")
+    p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
+                   help="stretch every protocol wait by X for slow links (default 1)")
+    p.add_argument("--seed", type=int, default=0, help="seed recorded in the report (default 0)")
+    p.add_argument("--allow-flight", action="store_true",
+                   help="let progress clauses start the mission (always on for builtin targets)")
+    p.add_argument("--no-restore", action="store_true",
+                   help="do not read the target's plans first and put them back afterwards")
+    p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    options = document.RunOptions(target=args.target, clauses=args.clauses, strict=args.strict,
+                                  time_scale=args.time_scale, seed=args.seed,
+                                  expectations=args.expect, baseline=args.baseline)
+    prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
+    print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
+    on_result = None if args.quiet else _printer()
+    allow = True if args.allow_flight else None
+    doc, run_outcome = suite.execute(prepared, allow_flight=allow, restore=not args.no_restore,
+                                     on_result=on_result)
+    if run_outcome.unresponsive and run_outcome.identity is None:
+        print(f"mavconform: target unresponsive: {run_outcome.unresponsive}", file=sys.stderr)
+    _summary(doc, args.report_dir)
+    return 0 if doc["summary"]["verdict"] == "pass" else 1
+
+
+def _printer():
+    def show(clause: Clause, result: ClauseResult) -> None:
+        print(f"  {MARK[result.outcome]:<5} {clause.id:<11} {clause.level.value:<6} {clause.title}", flush=True)
+        if result.outcome is not Outcome.PASS or result.detail:
+            if result.outcome in (Outcome.FAIL, Outcome.KNOWN_DEVIATION):
+                print(textwrap.fill(f"requirement: {clause.requirement} [{clause.source}]",
+                                    width=100, initial_indent=" " * 8, subsequent_indent=" " * 10))
+            print(textwrap.fill(result.detail, width=100, initial_indent=" " * 8,
+                                subsequent_indent=" " * 10), flush=True)
+    return show
+
+
+def _summary(doc: dict[str, Any], report_dir: str) -> None:
+    s = doc["summary"]
+    ident = doc["identity"]
+    who = (f"system {ident['system']} component {ident['component']} at {ident['address']}"
+           if ident else "no HEARTBEAT")
+    print(f"\ntarget {doc['run']['target']} ({who}); {doc['run']['duration_s']:.1f} s")
+    print("  outcome          clauses")
+    for name in ("pass", "fail", "known-deviation", "not-applicable", "skipped", "error"):
+        print(f"  {name:<16} {s[name]:>7}")
+    print(f"  {'total':<16} {s['total']:>7}")
+    gating = doc["gating"]
+    if gating["mode"] == "baseline":
+        print(f"baseline: {len(gating['regressions'])} regression(s)"
+              + (f": {', '.join(gating['regressions'])}" if gating["regressions"] else "")
+              + (f"; fixed since: {', '.join(gating['fixed'])}" if gating["fixed"] else ""))
+    print(f"restore: {doc['restore']['status']}: {doc['restore']['detail']}")
+    print(f"verdict: {s['verdict'].upper()} ({s['gating_failures']} clause(s) fail the run); "
+          f"reports in {report_dir}/")

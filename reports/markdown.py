@@ -1,0 +1,84 @@
+"""Markdown summary, sized for a GitHub job summary or a pull-request comment.
+
+Verdict first, then what did not pass, since that is what a reviewer acts on; the full
+clause matrix is folded away in <details>. GitHub renders inline HTML, so text from the
+target is escaped for Markdown *and* HTML: it cannot open a tag, break a table or a line.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+from urllib.parse import quote
+
+from reports.run_document import OUTCOMES, PASS, outcome_counts
+from reports.text import identity_text, one_line, seconds
+
+DETAIL_LIMIT = 200  # characters of detail per table cell
+
+OUTCOME_ICONS = {"pass": "✅", "fail": "❌", "known-deviation": "⚠️", "not-applicable": "➖",
+                 "skipped": "⏭️", "error": "💥"}
+
+# Backslash-escaping every ASCII punctuation mark is valid CommonMark; these are the ones
+# that can start emphasis, code, links, HTML, entities or end a table cell.
+_SPECIAL = re.compile(r"([\\`*_\[\]<>|&~#!])")
+
+
+def md(text: str, limit: int | None = None) -> str:
+    """`text` as literal Markdown on one line: safe in a table cell or a heading."""
+    return _SPECIAL.sub(r"\\\1", one_line(text, limit))
+
+
+def markdown_summary(doc: dict[str, Any]) -> str:
+    """The run as a Markdown document (GitHub flavour), ending with a newline."""
+    summary, clauses = doc["summary"], doc["clauses"]
+    passed = summary["verdict"] == "pass"
+    out = [f"## {'✅ PASS' if passed else '❌ FAIL'}: {md(doc['run']['target'])} "
+           f"({md(identity_text(doc['identity']))}), "
+           f"{md(doc['tool']['name'])} {md(doc['tool']['version'])}",
+           "",
+           f"Started {md(doc['run']['started'])}, took {seconds(doc['run']['duration_s'])}; "
+           f"gating mode {md(doc['gating']['mode'])}: {summary['gating_failures']} gating "
+           f"failure{'' if summary['gating_failures'] == 1 else 's'}.",
+           ""]
+    restore = doc["restore"]
+    restore_line = f"Target plans after the run: **{md(restore['status'])}**"
+    if restore["detail"]:
+        restore_line += f" ({md(restore['detail'], DETAIL_LIMIT)})"
+    out.append(restore_line + ".")
+    if doc["capture"] is not None:
+        out += ["", f"Capture: [{md(doc['capture'])}]({quote(one_line(doc['capture']))}) "
+                   "(MCAP, opens in Foxglove)."]
+    out += ["", "| Outcome | Clauses |", "|---|--:|"]
+    for outcome, count in outcome_counts(clauses).items():
+        out.append(f"| {OUTCOME_ICONS[outcome]} {outcome} | {count} |")
+    out.append(f"| **total** | **{len(clauses)}** |")
+
+    not_passing = [c for c in clauses if c["outcome"] != PASS]
+    if not_passing:
+        out += ["", f"### Not passing ({len(not_passing)})", "",
+                "| Clause | Level | Outcome | Title | Detail |", "|---|---|---|---|---|"]
+        for clause in sorted(not_passing, key=lambda c: OUTCOMES.index(c["outcome"])):
+            gating = " (gating)" if clause["gating"] else ""
+            out.append(f"| {md(clause['id'])} | {md(clause['level'])} | "
+                       f"{OUTCOME_ICONS[clause['outcome']]} {clause['outcome']}{gating} | "
+                       f"{md(clause['title'])} | {md(clause['detail'], DETAIL_LIMIT)} |")
+
+    gating = doc["gating"]
+    titles = {c["id"]: c["title"] for c in clauses}
+    for key, heading in (("regressions", "Regressions against the baseline"),
+                         ("fixed", "Fixed since the baseline")):
+        if gating[key]:
+            out += ["", f"### {heading} ({len(gating[key])})", ""]
+            out += [f"- {md(clause_id)}" + (f": {md(titles[clause_id])}"
+                                           if clause_id in titles else "")
+                    for clause_id in gating[key]]
+
+    out += ["", f"<details><summary>All {len(clauses)} clauses</summary>", "",
+            "| Clause | Level | Outcome | Title |", "|---|---|---|---|"]
+    for clause in clauses:
+        out.append(f"| {md(clause['id'])} | {md(clause['level'])} | "
+                   f"{OUTCOME_ICONS[clause['outcome']]} {clause['outcome']} | "
+                   f"{md(clause['title'])} |")
+    out += ["", "</details>"]
+    return "\n".join(out) + "\n"

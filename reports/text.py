@@ -1,0 +1,139 @@
+"""Text shared by the writers: cleaning strings from the wire, and wording events and targets.
+
+Details, STATUSTEXTs and field values come from the target and may hold anything: control
+characters (not allowed in XML 1.0, and they garble a terminal or a table), bidirectional
+overrides (they can make a report read backwards), lone surrogates (not encodable as UTF-8).
+Every writer passes data through `clean` or `one_line` before its own escaping.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any
+
+from reports.run_document import NOTE, RX, TX
+
+# C0 controls but tab and newline, DEL, C1 controls, bidi embeddings/overrides/isolates,
+# noncharacters U+FFFE/U+FFFF; lone surrogates are replaced rather than dropped.
+_UNSAFE = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069\ufffe\uffff]")
+_SURROGATE = re.compile("[\ud800-\udfff]")
+NON_FINITE = ("NaN", "Infinity", "-Infinity")  # how a non-finite float travels in fields
+
+# Field names shown shorter (or clearer) in a label. MISSION_ACK's `type` is its result.
+_FIELD_NAMES = {"mission_type": "type"}
+_ACK_FIELD_NAMES = {"type": "result", "mission_type": "type"}
+_LABEL_FIRST = ("seq", "count", "type", "command", "frame", "current", "total", "mission_type")
+_LABEL_HIDDEN = ("target_system", "target_component")  # always us / the target: noise
+
+
+def clean(text: str) -> str:
+    """`text` with unsafe characters removed (newlines and tabs kept; CR LF becomes LF)."""
+    text = text.replace("\r\n", "\n").replace("\r", "\n")
+    return _SURROGATE.sub("\ufffd", _UNSAFE.sub("", text))
+
+
+def one_line(text: str, limit: int | None = None) -> str:
+    """`text` cleaned, on one line (whitespace runs become one space), at most `limit` chars."""
+    text = " ".join(clean(text).split())
+    if limit is not None and len(text) > limit:
+        text = text[:limit - 1].rstrip() + "…"
+    return text
+
+
+def value_text(value: Any) -> str:
+    """A field value as JSON text, but a non-finite float's string bare (NaN, not "NaN")."""
+    if isinstance(value, str) and value in NON_FINITE:
+        return value
+    if isinstance(value, (list, tuple)):
+        return "[" + ",".join(value_text(v) for v in value) + "]"
+    return json.dumps(value, ensure_ascii=False)
+
+
+def event_label(event: dict[str, Any]) -> str:
+    """"MSG seq=1 type=0 ..." for tx/rx events (key fields first); a note's own text."""
+    if event["dir"] == NOTE:
+        return one_line(event["msg"])
+    fields = event["fields"]
+    names = _ACK_FIELD_NAMES if event["msg"] == "MISSION_ACK" else _FIELD_NAMES
+    order = [k for k in _LABEL_FIRST if k in fields]
+    order += sorted(k for k in fields if k not in order and k not in _LABEL_HIDDEN)
+    shown: set[str] = set()
+    parts = [one_line(event["msg"])]
+    for key in order:
+        name = names.get(key, key)
+        if name in shown or (name != key and name in fields and name not in names):
+            name = key  # never two fields under one name
+        shown.add(name)
+        parts.append(f"{one_line(name)}={one_line(value_text(fields[key]))}")
+    return " ".join(parts)
+
+
+def relative_time(t: float, t0: float) -> str:
+    """"+1.500 s": time since the first event of the exchange."""
+    return f"+{t - t0:.3f} s"
+
+
+def exchange_start(exchange: list[dict[str, Any]]) -> float:
+    """The time of the earliest event (0 for an empty exchange)."""
+    return min((event["t"] for event in exchange), default=0.0)
+
+
+def exchange_lines(exchange: list[dict[str, Any]], limit: int = 300) -> list[str]:
+    """The exchange as text, one event a line: "+0.001 s  target → tester  MISSION_ACK ..."."""
+    t0 = exchange_start(exchange)
+    lines = []
+    for event in exchange[:limit]:
+        peer = one_line(event["peer"])
+        arrow = {TX: f"{peer} → target", RX: f"target → {peer}", NOTE: "note"}[event["dir"]]
+        lines.append(f"{relative_time(event['t'], t0)}  {arrow}  {event_label(event)}")
+    if len(exchange) > limit:
+        lines.append(f"… {len(exchange) - limit} more events")
+    return lines
+
+
+def identity_text(identity: dict[str, Any] | None) -> str:
+    """"system 1 component 1, type 2, autopilot 4, MAVLink 2, at 127.0.0.1:40001"."""
+    if identity is None:
+        return "no answer from the target"
+    parts = [f"system {identity['system']} component {identity['component']}"]
+    for key, word in (("type", "type"), ("autopilot", "autopilot"),
+                      ("mavlink_version", "MAVLink")):
+        if identity.get(key) is not None:
+            parts.append(f"{word} {identity[key]}")
+    if identity.get("address"):
+        parts.append(f"at {one_line(str(identity['address']))}")
+    return ", ".join(parts)
+
+
+def seconds(value: float) -> str:
+    """A duration for people: "0.310 s", "12.5 s"."""
+    return f"{value:.3f} s" if value < 10 else f"{value:.1f} s"
+
+
+def run_facts(doc: dict[str, Any]) -> list[tuple[str, str]]:
+    """(label, value) pairs describing the run, known keys first, for the report headers."""
+    run = doc["run"]
+    facts = [("tool", f"{doc['tool']['name']} {doc['tool']['version']}"),
+             ("target", run["target"]), ("identity", identity_text(doc["identity"])),
+             ("started", run["started"]), ("duration", seconds(run["duration_s"]))]
+    labels = {"seed": "seed", "time_scale": "time scale", "strict": "strict",
+              "clauses": "clauses selected", "expectations": "expectations file",
+              "baseline": "baseline", "forced_wait_s": "forced waits"}
+    extra = [key for key in labels if key in run] + sorted(
+        key for key in run if key not in labels and key not in ("target", "started", "duration_s"))
+    for key in extra:
+        value = run[key]
+        if value is None:
+            shown = "none"
+        elif key == "forced_wait_s":
+            shown = seconds(value)
+        else:
+            shown = value if isinstance(value, str) else value_text(value)
+        facts.append((labels.get(key, key), shown))
+    gating = doc["gating"]
+    facts.append(("gating", gating["mode"]))
+    restore = doc["restore"]
+    facts.append(("plans after the run", f"{restore['status']}: {restore['detail']}"
+                  if restore["detail"] else restore["status"]))
+    return [(label, one_line(str(value))) for label, value in facts]
