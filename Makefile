@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test demo bench clean
+.PHONY: setup test run demo bench clean
 
 setup: $(VENV)/.installed
 
@@ -16,11 +16,15 @@ $(VENV)/.installed: pyproject.toml
 test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores)
 	$(BIN)/python -m pytest
 
-demo: setup          ## the main job: reference GCS <-> reference vehicle over lossy UDP loopback
+run: setup           ## the main job: the conformance suite vs builtin:spec over UDP loopback -> reports/out/
+	$(BIN)/mavconform run --target builtin:spec --report-dir reports/out
+
+demo: setup          ## reference GCS <-> reference vehicle over lossy UDP loopback
 	$(BIN)/mavconform demo
 
 bench: setup         ## figures, not pass/fail
 	$(BIN)/python bench/transfer_vs_codec.py
+	$(BIN)/python bench/conformance_wall.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis reports/out

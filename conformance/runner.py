@@ -39,6 +39,7 @@ class RunOutcome:
     duration_s: float
     forced_wait_s: float
     unresponsive: str | None = None     # why the target was given up on, if it was
+    discovery_s: float = 0.0            # waiting for the first HEARTBEAT (the target's period)
     snapshot: dict[str, int] = field(default_factory=dict)
 
 
@@ -49,6 +50,7 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *,
     results: list[ClauseResult] = []
     try:
         identity = session.discover()
+        discovered = time.monotonic() - started
     except TargetUnresponsive as exc:
         for clause in clauses:
             result = ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}")
@@ -75,7 +77,7 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *,
                       {"status": "skipped", "detail": "target unresponsive" if dead else "not asked"})
     forced = sum(t.forced_wait for t in session.testers())
     return RunOutcome(results, identity, restore_status, time.monotonic() - started, forced,
-                      unresponsive=dead)
+                      unresponsive=dead, discovery_s=discovered)
 
 
 def run_one(session: Session, clause: Clause) -> ClauseResult:
@@ -119,12 +121,22 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     return ClauseResult(clause.id, outcome, detail, round(end - begin, 6), events)
 
 
+SETTLE_QUIET = 0.005   # s without a frame that counts as "the target has finished replying"
+SETTLE_ROUNDS = 40
+
+
 def _settle(session: Session) -> None:
-    """Leave the target idle for the next clause."""
+    """Leave the target idle for the next clause: cancel whatever may be open, then let
+    its last replies arrive (a few ms on loopback), so none is taken for the next clause's."""
     for t in session.testers():
         for mt in PLAN_TYPES:
             t.node.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mt, t.target))
-    session.driver.run_until(lambda: False, timeout=0.0)
+    inbox = session.t.node.inbox
+    for _ in range(SETTLE_ROUNDS):   # bounded: at most SETTLE_ROUNDS quiet periods
+        seen = len(inbox)
+        session.driver.run_until(lambda: len(inbox) > seen, timeout=SETTLE_QUIET * session.scale)
+        if len(inbox) == seen:
+            break
 
 
 def _still_alive(session: Session) -> bool:
@@ -153,7 +165,8 @@ def _restore(session: Session, snapshot: dict[MissionType, list[MissionItem]]) -
             continue
         frame = procedures.upload(t, items, mt) if items else procedures.clear(t, mt)
         ok = frame is not None and frame.msg.type == MissionResult.ACCEPTED
-        (restored if ok else failed).append(f"{mt.label} ({len(items)} items)")
+        (restored if ok else failed).append(f"{mt.label} ({len(items)} items)" if items
+                                            else f"{mt.label} (emptied again)")
     if failed:
         return {"status": "failed", "detail": "could not put back: " + ", ".join(failed)}
     if restored:

@@ -59,6 +59,7 @@ class Session:
             self.driver.add_node("tester", node)
             self.driver.connect("tester", "vehicle")
             self.target_address = "vehicle"
+            self.vehicle.endpoint.add_address("tester")
             node.endpoint.add_address("vehicle")
         else:
             self.driver = UdpDriver(seed=seed)
@@ -67,8 +68,11 @@ class Session:
                     self.vehicle = build_vehicle(uri)
                     self.guard = GuardedNode(self.vehicle)
                     self.target_address = self.driver.add_node(self.guard)
-                    self.driver.add_node(node)
+                    tester_address = self.driver.add_node(node)
                     node.endpoint.add_address(self.target_address)
+                    # in-process, the vehicle may know us from the start: no 1 s wait for
+                    # its first HEARTBEAT to find a listener
+                    self.vehicle.endpoint.add_address(tester_address)
                 elif uri.kind == "udp":
                     self.driver.add_node(node)
                     self.target_address = uri.udp.address

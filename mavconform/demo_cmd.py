@@ -1,7 +1,6 @@
 """`mavconform demo`: the reference vehicle and GCS on real UDP loopback, behind a lossy link.
 
-Until the conformance runner lands this is the project's main job: it shows the whole
-stack working over real sockets. It uploads a plan with mission, geofence and rally points,
+It shows the whole stack working over real sockets. It uploads a plan with mission, geofence and rally points,
 downloads it back, compares, clears everything, confirms the vehicle is empty, and prints a
 summary. Exit 0 when every step matched, 1 otherwise.
 """

@@ -80,6 +80,8 @@ def items_requested_in_order(s: Session) -> None:
         if frame.msg.seq != seq:
             raise ClauseFailed(f"after {seq} items the vehicle requested seq {frame.msg.seq}, expected {seq}")
         _answer(t, items, seq)
+    with beyond_the_clause("waiting for the final MISSION_ACK"):
+        t.expect(ack(mission_type=MT))
 
 
 @check("MIS.UP.03")

@@ -1,6 +1,6 @@
 """Small valid plans the checks upload: a few waypoints, a fence polygon, rally points.
 
-Positions sit a few metres from the target's home (taken from its GLOBAL_POSITION_INT when
+Positions sit within metres of the target's home (taken from its GLOBAL_POSITION_INT when
 it sends one), so a check that flies the plan finishes in seconds. Every plan is distinct
 from every other (`variant`), so "the stored plan is still the old one" is never an accident.
 """
@@ -11,7 +11,7 @@ from reference_impl.mission.constants import Cmd
 from reference_impl.mission.items import MissionItem, MissionType
 
 FRAME_GLOBAL_RELATIVE_ALT = 3      # MAV_FRAME_GLOBAL_RELATIVE_ALT: x/y degE7 in the INT form
-STEP = 40                          # degE7 between waypoints: about 4.5 m
+STEP = 40                          # degE7 between waypoints: about half a metre
 DEFAULT_HOME = (473977420, 85455940)
 
 

@@ -56,7 +56,9 @@ class Tester:
 
     # --- script ---------------------------------------------------------------------------
     def mark(self) -> None:
-        """Ignore everything received so far."""
+        """Ignore everything received so far, including datagrams already waiting in the
+        socket (late replies to an earlier exchange must not answer the next one)."""
+        self.driver.run_until(_never, timeout=0.0)
         self._floor = len(self.node.inbox)
         self._consumed.clear()
 
@@ -180,6 +182,10 @@ class Tester:
 
 def _always() -> bool:
     return True
+
+
+def _never() -> bool:
+    return False
 
 
 def _describe(frame: Frame) -> str:

@@ -35,11 +35,10 @@ class _RequestsFromOne(MissionServer):
 
 
 class _SkipsAnItem(MissionServer):
-    def _request(self, slot, now, *, reset_retries=True):
-        if slot.expected == 1 and slot.count > 2 and len(slot.received) == 1:
-            slot.expected = 2                  # jumps from item 0 to item 2
-            slot.received.append(slot.received[0])
-        return super()._request(slot, now, reset_retries=reset_retries)
+    def _request_msg(self, slot):
+        if slot.expected == 1 and slot.count >= 4:  # in longer plans, asks for item 2 where item 1 is due
+            return m.request_message(2, slot.mission_type, slot.partner, as_int=self.behaviour.request_int)
+        return super()._request_msg(slot)
 
 
 class _NoFinalAck(MissionServer):
@@ -115,20 +114,20 @@ class _CountZeroKeepsPlan(MissionServer):
 
 mutant("requests-from-1", "answers MISSION_COUNT with a request for item 1, not item 0",
        {"MIS.UP.01", "MIS.UP.02"}, server_mutant(_RequestsFromOne))
-mutant("skips-an-item", "requests item 2 after item 0, never item 1",
+mutant("skips-an-item", "in plans of 4 or more items, requests item 2 after item 0, never item 1",
        {"MIS.UP.02"}, server_mutant(_SkipsAnItem))
 mutant("no-final-ack", "stores the plan after the last item but sends no MISSION_ACK",
        {"MIS.UP.03"}, server_mutant(_NoFinalAck))
 mutant("acks-but-keeps-old", "answers ACCEPTED after the last item but keeps the old plan",
        {"MIS.UP.04"}, server_mutant(_AcksButKeepsOld))
 mutant("non-atomic-upload", "writes each item into the stored plan as it arrives",
-       {"MIS.UP.05", "MIS.UP.12", "MIS.UP.17"}, server_mutant(_NonAtomic))
+       {"MIS.UP.05", "MIS.UP.12", "MIS.UP.17", "MIS.CAN.02"}, server_mutant(_NonAtomic))
 mutant("takes-out-of-order-items", "stores an out-of-sequence item instead of re-requesting",
        {"MIS.UP.10", "MIS.UP.11"}, server_mutant(_TakesOutOfOrderItems))
 mutant("out-of-order-is-fatal", "ends the upload with INVALID_SEQUENCE on an out-of-sequence item",
        {"MIS.UP.10", "MIS.UP.11"}, server_mutant(_OutOfOrderIsFatal))
 mutant("ignores-gcs-error-ack", "goes on requesting items after the GCS's error MISSION_ACK",
-       {"MIS.UP.12"}, server_mutant(_IgnoresGcsErrorAck))
+       {"MIS.UP.12", "MIS.CAN.01"}, server_mutant(_IgnoresGcsErrorAck))
 mutant("clears-on-refused-count", "refuses a too-large count with NO_SPACE but clears the stored plan",
        {"MIS.UP.13"}, server_mutant(_ClearsOnRefusedCount))
 mutant("int-only", "rejects MISSION_ITEM (float) items with UNSUPPORTED",

@@ -1,0 +1,133 @@
+"""The conformance suite as pytest tests: `pytest --pyargs conformance --mavlink-target URI`.
+
+Registered as a pytest11 entry point, so it loads in every pytest run of an environment
+where mavconform is installed; it only adds options until `--mavlink-target` is given, and
+imports the suite lazily. Each clause is one test named by its id; pass/fail map to pytest's,
+not-applicable and skipped to skips, known deviations to xfail, and an undecided clause
+(target unresponsive, precondition) to a failure saying so. `--mavlink-report-dir` writes
+the same reports as `mavconform run`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+_STATE: dict[str, Any] = {}
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    g = parser.getgroup("mavconform", "MAVLink mission conformance (mavconform)")
+    g.addoption("--mavlink-target", metavar="URI",
+                help="run the conformance clauses against URI (builtin:spec, udp:HOST:PORT, udpin:PORT)")
+    g.addoption("--mavlink-clauses", default="*", metavar="GLOB", help="clause id globs (default all)")
+    g.addoption("--mavlink-strict", action="store_true", help="SHOULD failures fail too")
+    g.addoption("--mavlink-expect", metavar="NAME|FILE", help="expectations file of known deviations")
+    g.addoption("--mavlink-time-scale", type=float, default=1.0, metavar="X", help="stretch waits by X")
+    g.addoption("--mavlink-allow-flight", action="store_true", help="let progress clauses fly")
+    g.addoption("--mavlink-report-dir", metavar="DIR", help="write run.json/junit/md/html/mcap here")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("--mavlink-target", default=None):
+        _prepared(config)   # check every option before collection: a mistake is a usage error
+
+
+def _prepared(config: pytest.Config):
+    if "prepared" not in _STATE:
+        from reference_impl.errors import UsageError
+
+        from . import document, suite
+        options = document.RunOptions(
+            target=config.getoption("--mavlink-target"), clauses=config.getoption("--mavlink-clauses"),
+            strict=config.getoption("--mavlink-strict"), time_scale=config.getoption("--mavlink-time-scale"),
+            expectations=config.getoption("--mavlink-expect"))
+        try:
+            _STATE["prepared"] = suite.prepare(options, report_dir=config.getoption("--mavlink-report-dir"))
+        except UsageError as exc:
+            raise pytest.UsageError(str(exc)) from None
+    return _STATE["prepared"]
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    if "mavlink_clause" not in metafunc.fixturenames:
+        return
+    if not metafunc.config.getoption("--mavlink-target"):
+        metafunc.parametrize("mavlink_clause", [pytest.param(None, marks=pytest.mark.skip(
+            reason="no --mavlink-target given"))], ids=["no-target"])
+        return
+    clauses = _prepared(metafunc.config).clauses
+    metafunc.parametrize("mavlink_clause", clauses, ids=[c.id for c in clauses])
+
+
+@pytest.fixture(scope="session")
+def mavlink_session(request: pytest.FixtureRequest):
+    """The open target: discovered, its plans read; restored and reported at the end."""
+    import datetime as dt
+
+    from .outcome import TargetUnresponsive
+    from .runner import _restore, _snapshot
+    from .session import Session
+    from reference_impl.net.capture import McapCapture
+    p = _prepared(request.config)
+    capture = McapCapture(p.report_dir / "run.mcap") if p.report_dir is not None else None
+    session = Session(p.uri, scale=p.options.time_scale, capture=capture,
+                      allow_flight=True if request.config.getoption("--mavlink-allow-flight") else None)
+    started = dt.datetime.now(dt.timezone.utc)
+    results: list = []
+    _STATE["results"] = results
+    try:
+        try:
+            session.discover()
+        except TargetUnresponsive as exc:
+            pytest.fail(f"target unresponsive: {exc}", pytrace=False)
+        snapshot = _snapshot(session)
+        yield session
+        restore = _restore(session, snapshot) if snapshot is not None else {
+            "status": "skipped", "detail": "could not read the plans before the run"}
+        if p.report_dir is not None:
+            _write(p, session, results, restore, started, capture)
+    finally:
+        if capture is not None:
+            capture.close()
+        session.close()
+
+
+def _write(p, session, results, restore, started, capture) -> None:
+    import datetime as dt
+
+    from reports.write import write_reports
+
+    from . import document, gating
+    from .runner import RunOutcome
+    run = RunOutcome(results, session.identity, restore,
+                     (dt.datetime.now(dt.timezone.utc) - started).total_seconds(),
+                     sum(t.forced_wait for t in session.testers()))
+    gating.apply_expectations(run.results, p.expected)
+    flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
+    doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
+                         capture="run.mcap" if capture is not None else None)
+    write_reports(doc, p.report_dir)
+
+
+def decide(session, clause, expected: dict, strict: bool) -> Any:
+    """Run one clause and turn its outcome into pytest's vocabulary."""
+    from .clause import Level
+    from .gating import apply_expectations
+    from .outcome import Outcome
+    from .runner import run_one
+    result = run_one(session, clause)
+    apply_expectations([result], expected)
+    _STATE.setdefault("results", []).append(result)
+    text = f"{clause.id} ({clause.level.value}) {clause.title}: {result.detail}".rstrip(": ")
+    if result.outcome is Outcome.PASS:
+        return result
+    if result.outcome is Outcome.KNOWN_DEVIATION:
+        pytest.xfail(f"known deviation ({result.expectation}): {result.detail}")
+    if result.outcome in (Outcome.NOT_APPLICABLE, Outcome.SKIPPED):
+        pytest.skip(f"{result.outcome.value}: {result.detail}")
+    if result.outcome is Outcome.FAIL and clause.level is Level.SHOULD and not strict:
+        pytest.skip(f"SHOULD clause failed (not gating without --mavlink-strict): {text}")
+    pytest.fail(f"{result.outcome.value}: {text}\n  requirement: {clause.requirement} [{clause.source}]",
+                pytrace=False)

@@ -1,0 +1,185 @@
+"""`mavconform run`, `clauses` and `report render` from the outside: exit codes, reports,
+one-line usage errors, baseline gating, expectations, and the pytest plugin."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conformance import expectations
+from conformance.gating import apply_expectations, gate
+from conformance.outcome import ClauseResult, Outcome
+from mavconform.cli import main
+from reference_impl.errors import UsageError
+
+pytestmark = pytest.mark.udp
+REPORTS = {"run.json", "run.junit.xml", "run.md", "run.html", "run.mcap"}
+
+
+def _run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_run_against_builtin_writes_all_five_reports(tmp_path, capsys) -> None:
+    code, out, _ = _run(capsys, "run", "--clauses", "MIS.UP.0[1-3],MIS.DN.01", "--report-dir", str(tmp_path))
+    assert code == 0, out
+    assert {p.name for p in tmp_path.iterdir()} == REPORTS
+    doc = json.loads((tmp_path / "run.json").read_text())
+    assert [c["id"] for c in doc["clauses"]] == ["MIS.UP.01", "MIS.UP.02", "MIS.UP.03", "MIS.DN.01"]
+    assert all(c["outcome"] == "pass" for c in doc["clauses"])
+    assert doc["identity"]["system"] == 1 and doc["identity"]["address"].startswith("127.0.0.1:")
+    assert "verdict: PASS" in out and "PASS  MIS.UP.01" in out
+
+
+def test_mutant_fails_the_run_and_baseline_gates_only_regressions(tmp_path, capsys) -> None:
+    spec_dir, mut_dir = tmp_path / "spec", tmp_path / "mut"
+    clauses = "MIS.UP.1[56]"
+    assert _run(capsys, "run", "--clauses", clauses, "--report-dir", str(spec_dir))[0] == 0
+    code, out, _ = _run(capsys, "run", "--target", "mutant:count-zero-keeps-plan", "--clauses", clauses,
+                        "--report-dir", str(mut_dir))
+    assert code == 1 and "FAIL  MIS.UP.16" in out and "requirement:" in out
+    # against a baseline where UP.16 passed: a regression, exit 1
+    code, out, _ = _run(capsys, "run", "--target", "mutant:count-zero-keeps-plan", "--clauses", clauses,
+                        "--report-dir", str(tmp_path / "m2"), "--baseline", str(spec_dir / "run.json"))
+    assert code == 1 and "regression(s): MIS.UP.16" in out
+    # against a baseline where it already failed: no regression, exit 0
+    code, out, _ = _run(capsys, "run", "--target", "mutant:count-zero-keeps-plan", "--clauses", clauses,
+                        "--report-dir", str(tmp_path / "m3"), "--baseline", str(mut_dir / "run.json"))
+    assert code == 0 and "0 regression(s)" in out
+
+
+def test_should_failure_gates_only_with_strict(tmp_path, capsys) -> None:
+    args = ["run", "--target", "mutant:float-requests", "--clauses", "MIS.UP.15", "--report-dir", str(tmp_path)]
+    assert _run(capsys, *args)[0] == 0
+    assert _run(capsys, *args, "--strict")[0] == 1
+
+
+def test_expectations_turn_a_failure_into_a_known_deviation(tmp_path, capsys) -> None:
+    exp = tmp_path / "fork.toml"
+    exp.write_text('[[deviation]]\nclause = "MIS.UP.16"\nvariant = "X1"\nreason = "keeps the plan"\n'
+                   '[[deviation]]\nclause = "MIS.UP.01"\nreason = "used to fail"\n')
+    code, out, _ = _run(capsys, "run", "--target", "mutant:count-zero-keeps-plan", "--clauses",
+                        "MIS.UP.01,MIS.UP.16", "--expect", str(exp), "--report-dir", str(tmp_path / "r"))
+    assert code == 0, out
+    doc = json.loads((tmp_path / "r" / "run.json").read_text())
+    by_id = {c["id"]: c for c in doc["clauses"]}
+    assert by_id["MIS.UP.16"]["outcome"] == "known-deviation"
+    assert by_id["MIS.UP.01"]["outcome"] == "pass"
+    assert "deviation no longer observed" in by_id["MIS.UP.01"]["detail"]
+
+
+def test_dead_target_is_reported_fast(tmp_path, capsys) -> None:
+    import socket
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as quiet:   # bound, never answers
+        quiet.bind(("127.0.0.1", 0))
+        port = quiet.getsockname()[1]
+        code, out, err = _run(capsys, "run", "--target", f"udp:127.0.0.1:{port}", "--clauses", "MIS.UP.01",
+                              "--time-scale", "0.2", "--report-dir", str(tmp_path))
+    assert code == 1
+    assert "no HEARTBEAT" in err and err.count("\n") == 1
+    assert json.loads((tmp_path / "run.json").read_text())["clauses"][0]["outcome"] == "error"
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["run", "--target", "tcp:1.2.3.4:5"], "unknown scheme"),
+    (["run", "--target", "udp:127.0.0.1:99999"], "bad port"),
+    (["run", "--target", "mutant:nope"], "unknown mutant"),
+    (["run", "--clauses", "MIS.NOPE.*"], "matches no clause"),
+    (["run", "--baseline", "/nonexistent/run.json"], "/nonexistent/run.json"),
+    (["run", "--expect", "nosuchautopilot"], "nosuchautopilot"),
+    (["run", "--time-scale", "0"], "must be > 0"),
+    (["report", "render", "/nonexistent/run.json"], "/nonexistent/run.json"),
+])
+def test_usage_mistakes_get_one_line_and_exit_2(argv, message, capsys, tmp_path) -> None:
+    with pytest.raises(SystemExit) if argv[1:2] == ["--time-scale"] else _no_raise():
+        code = main(argv + (["--report-dir", str(tmp_path)] if argv[0] == "run" else []))
+        assert code == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+class _no_raise:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_bad_baseline_file_is_a_usage_error(tmp_path, capsys) -> None:
+    bad = tmp_path / "old.json"
+    bad.write_text("{not json")
+    code, _, err = _run(capsys, "run", "--baseline", str(bad), "--report-dir", str(tmp_path / "r"))
+    assert code == 2 and str(bad) in err
+
+
+def test_report_render_rewrites_html(tmp_path, capsys) -> None:
+    assert _run(capsys, "run", "--target", "mutant:int-only", "--clauses", "MIS.UP.14",
+                "--report-dir", str(tmp_path))[0] == 1
+    out = tmp_path / "again.html"
+    assert _run(capsys, "report", "render", str(tmp_path / "run.json"), "--html", str(out))[0] == 0
+    html = out.read_text()
+    assert "MIS.UP.14" in html and "<svg" in html
+
+
+def test_clauses_lists_and_filters(capsys) -> None:
+    code, out, _ = _run(capsys, "clauses", "--clauses", "MIS.UP.*", "--level", "SHOULD")
+    assert code == 0 and "MIS.UP.07" in out and "MIS.UP.01" not in out
+    code, out, _ = _run(capsys, "clauses", "--mutants", "--clauses", "MIS.UP.16")
+    assert "mutant:count-zero-keeps-plan" in out
+
+
+def test_expectations_file_errors_name_the_entry(tmp_path) -> None:
+    bad = tmp_path / "x.toml"
+    bad.write_text('[[deviation]]\nclause = "MIS.NOPE.01"\nreason = "r"\n')
+    with pytest.raises(UsageError, match=r"x.toml: deviation\[0\]: unknown clause"):
+        expectations.load(str(bad))
+    bad.write_text("deviation = 3")
+    with pytest.raises(UsageError, match="array of tables"):
+        expectations.load(str(bad))
+
+
+def test_gating_rules() -> None:
+    results = [ClauseResult("MIS.UP.01", Outcome.FAIL), ClauseResult("MIS.UP.07", Outcome.FAIL),
+               ClauseResult("MIS.OID.01", Outcome.FAIL), ClauseResult("MIS.UP.02", Outcome.ERROR),
+               ClauseResult("MIS.UP.03", Outcome.NOT_APPLICABLE)]
+    flags, _ = gate(results, strict=False, baseline=None)
+    assert flags == {"MIS.UP.01": True, "MIS.UP.07": False, "MIS.OID.01": True, "MIS.UP.02": True,
+                     "MIS.UP.03": False}
+    assert gate(results, strict=True, baseline=None)[0]["MIS.UP.07"] is True
+    flags, summary = gate(results, strict=False, baseline={"MIS.UP.01": "pass", "MIS.UP.02": "error"})
+    assert summary["regressions"] == ["MIS.UP.01"] and not flags["MIS.UP.02"]
+    apply_expectations(results, {"MIS.UP.01": expectations.Deviation("MIS.UP.01", "why", "A1")})
+    assert results[0].outcome is Outcome.KNOWN_DEVIATION and results[0].expectation == "A1: why"
+
+
+def test_pytest_plugin_runs_clauses_as_tests(tmp_path) -> None:
+    def pytest_run(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--pyargs",
+                               "conformance", *args], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    ok = pytest_run("--mavlink-target", "builtin:spec", "--mavlink-clauses", "MIS.UP.01,MIS.UP.16",
+                    "--mavlink-report-dir", str(tmp_path / "r"))
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    assert "2 passed" in ok.stdout and (tmp_path / "r" / "run.html").is_file()
+    bad = pytest_run("--mavlink-target", "mutant:count-zero-keeps-plan", "--mavlink-clauses", "MIS.UP.16")
+    assert bad.returncode == 1 and "MIS.UP.16" in bad.stdout
+    usage = pytest_run("--mavlink-target", "nope:1")
+    assert usage.returncode == 4 and "unknown scheme" in usage.stderr
+
+
+def test_no_reply_leaks_into_the_next_clause(tmp_path, capsys) -> None:
+    """Regression: a clause that ended before the target's last reply (UP.02 once did) let
+    that reply answer the next clause's first expectation."""
+    assert _run(capsys, "run", "--clauses", "MIS.UP.0[1-4],MIS.DN.01,MIS.CLR.01", "--report-dir", str(tmp_path))[0] == 0
+    doc = json.loads((tmp_path / "run.json").read_text())
+    for clause in doc["clauses"]:
+        events = [e for e in clause["exchange"] if e["dir"] != "note"]
+        first_tx = next(i for i, e in enumerate(events) if e["dir"] == "tx")
+        early = [e["msg"] for e in events[:first_tx] if e["msg"] not in ("MISSION_CURRENT", "STATUSTEXT")]
+        assert early == [], (clause["id"], early)
