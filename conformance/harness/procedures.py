@@ -17,7 +17,7 @@ from reference_impl.mission.items import MissionItem, MissionType
 from reference_impl.wire.frame import Frame
 
 from ..outcome import ClauseFailed, PreconditionFailed
-from .match import ack, msg, request
+from .match import Match, ack, msg, request
 from .tester import Tester
 
 RETRIES = 5
@@ -159,3 +159,26 @@ def _first_difference(got: list[MissionItem], want: list[MissionItem]) -> str:
 
 def _v(value: object) -> str:
     return str(int(value)) if isinstance(value, int) else repr(value)
+
+
+def setup_expect(t: Tester, match: Match, what: str) -> Frame:
+    """`t.expect` for a step the clause builds on but does not judge: if it does not come,
+    the clause is undecided (the clause that owns the step judges it)."""
+    frame = t.poll_for(match, t.timings.default_timeout)
+    if frame is None:
+        raise PreconditionFailed(f"setup: {what}: expected {match} within {t.reply_timeout:g} s "
+                                 "(another clause judges that step)")
+    return frame
+
+
+def judge_stored(t: Tester, want: list[MissionItem], before: list[MissionItem], what: str,
+                 mission_type: MissionType = MissionType.MISSION) -> None:
+    """The stored plan must be `want`, the plan just accepted. If it is still `before`, the
+    vehicle stores no accepted upload at all: MIS.UP.04's finding, not this clause's."""
+    got = stored(t, mission_type)
+    if same_plan(got, want):
+        return
+    if same_plan(got, before):
+        raise PreconditionFailed(f"{what}: the vehicle accepted the upload but still holds the plan from "
+                                 "before it (MIS.UP.04 judges that)")
+    require_same_plan(got, want, what)

@@ -1,0 +1,205 @@
+"""Framing (seed 001, "Packet format" and "Heartbeat"; seed 000, "Mission Types"): MIS.FRM.*
+
+What the target's frames themselves must be: MAVLink 2 whenever a transfer needs the
+mission_type extension (fence, rally), a good checksum on every frame, a packet sequence
+that counts up by one per frame, and a HEARTBEAT that keeps coming.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+
+from reference_impl.mission import messages as m
+from reference_impl.mission.constants import MissionResult
+from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
+from reference_impl.wire.frame import Frame
+
+from ..harness import plans, procedures
+from ..harness.match import ITEMS, REQUESTS, ack, msg
+from ..harness.tester import Tester
+from ..outcome import ClauseFailed, NotApplicable, PreconditionFailed
+from ..session import Session
+from . import check
+
+MISSION, FENCE, RALLY = MissionType.MISSION, MissionType.FENCE, MissionType.RALLY
+RETRIES = procedures.RETRIES
+HEARTBEAT_WINDOW = 2.5     # s in which at least two HEARTBEATs must come (1 Hz nominal)
+HEARTBEAT_LOOKBACK = 1.0   # s of already-received traffic the window may start in
+MAX_STEP_FORWARD = 127     # a seq step of more than this (mod 256) is a step backwards
+
+
+# --- MIS.FRM.01 ---------------------------------------------------------------------------
+
+def _require_v2(frame: Frame, during: str) -> None:
+    if frame.version != 2:
+        got = frame.msg
+        fields = ", ".join(f"{k}={getattr(got, k)}" for k in ("seq", "count", "type") if hasattr(got, k))
+        raise ClauseFailed(f"during {during} the vehicle sent {got._type}{{{fields}}} in a MAVLink "
+                           f"{frame.version} frame (magic 0x{frame.raw[0]:02X}); expected MAVLink 2, the "
+                           "only version that carries mission_type")
+
+
+def _typed_upload(t: Tester, items: list[MissionItem], mt: MissionType) -> bool:
+    """Upload, accepting requests and ACKs whatever mission_type they say (a MAVLink 1 frame
+    cannot say any), checking every frame's version. False if the type is unsupported."""
+    during = f"a {mt.label} upload"
+    t.mark()
+    t.send(m.count_message(len(items), mt, t.target))
+    for _ in range((len(items) + 2) * (RETRIES + 2)):
+        frame = t.poll_for(msg(REQUESTS) | ack(), t.timings.default_timeout)
+        if frame is None:
+            raise PreconditionFailed(f"{during} stalled: no request or MISSION_ACK within the reply timeout")
+        _require_v2(frame, during)
+        got = frame.msg
+        if got._type == "MISSION_ACK":
+            if got.type == MissionResult.UNSUPPORTED:
+                return False
+            if got.type != MissionResult.ACCEPTED:
+                raise PreconditionFailed(f"{during} was answered {procedures.result_name(got.type)}")
+            return True
+        if 0 <= got.seq < len(items):
+            t.send(m.item_message(items[got.seq], t.target))
+    raise PreconditionFailed(f"{during} never ended")
+
+
+def _typed_download(t: Tester, n: int, mt: MissionType) -> None:
+    during = f"a {mt.label} download"
+    t.mark()
+    t.send(m.request_list_message(mt, t.target))
+    frame = t.poll_for(msg("MISSION_COUNT") | ack(), t.timings.default_timeout)
+    if frame is None:
+        raise PreconditionFailed(f"{during}: MISSION_REQUEST_LIST got no answer")
+    _require_v2(frame, during)
+    for seq in range(n):
+        for _ in range(RETRIES + 1):
+            t.send(m.request_message(seq, mt, t.target))
+            frame = t.poll_for(msg(ITEMS, seq=seq) | ack(), t.timings.default_timeout)
+            if frame is not None:
+                break
+        if frame is None:
+            raise PreconditionFailed(f"{during}: item {seq} never came")
+        _require_v2(frame, during)
+    t.send(m.ack_message(MissionResult.ACCEPTED, mt, t.target))
+
+
+@check("MIS.FRM.01")
+def fence_and_rally_in_mavlink2(s: Session) -> None:
+    t = s.t
+    done = []
+    for mt in (FENCE, RALLY):
+        items = plans.plan(mt, variant=80)
+        if _typed_upload(t, items, mt):
+            _typed_download(t, len(items), mt)
+            done.append(mt.label)
+    if not done:
+        raise NotApplicable("the vehicle stores neither fence nor rally plans (both refused as unsupported)")
+
+
+# --- MIS.FRM.02 ---------------------------------------------------------------------------
+
+def _target_errors(s: Session) -> list:
+    """The tester's kept decode errors from the target's address (all of them if the address
+    is not known)."""
+    address = s.target_address
+    return [e for e in s.t.node.endpoint.decode_errors if address is None or e[0] == address]
+
+
+def _new_errors(s: Session, before: list) -> list:
+    seen = {id(e) for e in before}
+    return [e for e in _target_errors(s) if id(e) not in seen]
+
+
+def _checkable(error) -> bool:
+    """A frame whose checksum we can judge: not one of a message our dialect lacks (its
+    CRC_EXTRA is unknown to us, so its checksum cannot be checked)."""
+    return not error[1].reason.startswith("unknown message id")
+
+
+@check("MIS.FRM.02")
+def frames_have_valid_checksums(s: Session) -> None:
+    t = s.t
+    before = _target_errors(s)
+    frames_before = len(t.node.inbox)
+    for mt in PLAN_TYPES:
+        items = plans.plan(mt, variant=81)
+        frame = procedures.upload(t, items, mt)
+        if frame is None or frame.msg.type != MissionResult.ACCEPTED:
+            continue
+        if procedures.download(t, mt) is None:
+            raise PreconditionFailed(f"the {mt.label} download did not complete")
+    new = [e for e in _new_errors(s, before) if _checkable(e)]
+    if new:
+        received = len(t.node.inbox) - frames_before
+        shown = "; ".join(str(e[1]) for e in new[:3])
+        raise ClauseFailed(f"{len(new)} frame(s) from the target failed to decode (beside {received} good "
+                           f"ones) during uploads and downloads of every plan type: {shown}")
+
+
+# --- MIS.FRM.03 ---------------------------------------------------------------------------
+
+def _on_loopback(s: Session) -> bool:
+    if s.uri.in_process:
+        return True
+    address = s.target_address
+    try:
+        return isinstance(address, tuple) and ipaddress.ip_address(address[0]).is_loopback
+    except ValueError:
+        return False
+
+
+@check("MIS.FRM.03")
+def packet_sequence_counts_up(s: Session) -> None:
+    t = s.t
+    before = _target_errors(s)
+    start = len(t.node.inbox)
+    procedures.ensure_plan(t, plans.mission(4, variant=82), MISSION)
+    if procedures.download(t, MISSION) is None:
+        raise PreconditionFailed("the mission download did not complete")
+    frames = [f for _, f in t.node.inbox[start:]]
+    if len(frames) < 2:
+        raise PreconditionFailed("fewer than two frames came from the target")
+    lost_here = len(_new_errors(s, before))   # frames we know were damaged and dropped
+    may_lose = not _on_loopback(s)
+    missing = 0
+    for a, b in zip(frames, frames[1:]):
+        step = (b.seq - a.seq) % 256
+        if step == 0 or step > MAX_STEP_FORWARD:
+            kind = "repeated" if step == 0 else f"went back by {256 - step}"
+            raise ClauseFailed(f"the packet sequence {kind}: {a.msg._type} had seq {a.seq}, the next frame "
+                               f"({b.msg._type}) seq {b.seq}; each frame should carry the previous seq + 1 "
+                               "(mod 256)")
+        missing += step - 1
+    if missing > lost_here and not may_lose:
+        raise ClauseFailed(f"the packet sequence skipped {missing} value(s) over {len(frames)} frames, but "
+                           f"only {lost_here} frame(s) from the target were lost (failed to decode); on "
+                           "loopback nothing else is lost, so each frame should carry the previous seq + 1 "
+                           "(gaps are tolerated only for frames that could have been lost)")
+    if missing:
+        t.note(f"the packet sequence skipped {missing} value(s) over {len(frames)} frames "
+               + ("(frames may be lost on this network)" if may_lose else f"({lost_here} frames were lost)"))
+
+
+# --- MIS.FRM.04 ---------------------------------------------------------------------------
+
+@check("MIS.FRM.04")
+def heartbeat_is_regular(s: Session) -> None:
+    t = s.t
+    node = t.node
+    opened = t.now() - HEARTBEAT_LOOKBACK * t.scale
+    closes = opened + HEARTBEAT_WINDOW * t.scale
+
+    def heartbeats() -> list[float]:
+        out = []
+        for at, frame in reversed(node.inbox):
+            if at < opened:
+                break
+            if frame.msg._type == "HEARTBEAT":
+                out.append(at)
+        return out[::-1]
+
+    t.driver.run_until(lambda: len(heartbeats()) >= 2, timeout=max(0.0, closes - t.now()))
+    seen = [round(at - opened, 3) for at in heartbeats() if at <= closes]
+    t.note(f"HEARTBEATs at {seen} s into a {HEARTBEAT_WINDOW * t.scale:g} s window")
+    if len(seen) < 2:
+        raise ClauseFailed(f"{len(seen)} HEARTBEAT(s) in {HEARTBEAT_WINDOW * t.scale:g} s; expected at least 2 "
+                           "(a component broadcasts its HEARTBEAT regularly, nominally at 1 Hz)")

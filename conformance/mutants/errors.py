@@ -1,0 +1,35 @@
+"""Mutants that break the error clauses (MIS.ERR.*)."""
+
+from __future__ import annotations
+
+from reference_impl.mission import messages as m
+from reference_impl.mission.actions import Send
+from reference_impl.mission.constants import MissionResult
+from reference_impl.mission.server import MissionServer
+from reference_impl.mission.transitions import SlotState
+
+from . import mutant, server_mutant
+
+UNDEFINED_RESULT = 99   # no MAV_MISSION_RESULT has this value
+
+
+class _UndefinedUnsupportedCode(MissionServer):
+    def _unsupported(self, raw_type, src):
+        return [Send(m.ack_message(UNDEFINED_RESULT, raw_type, src), src)]
+
+
+class _BusyAfterInvalidRequest(MissionServer):
+    def _on_request(self, msg, src, now):
+        t = self._plan_type(msg.mission_type)
+        slot = self._slots[t] if t is not None else None
+        if slot is not None and slot.state is SlotState.SENDING and slot.partner == src \
+                and msg.seq >= self.store.count(t):
+            # the error is sent, but the download is kept open for its partner
+            return [Send(m.ack_message(MissionResult.INVALID_SEQUENCE, t, src), src)]
+        return super()._on_request(msg, src, now)
+
+
+mutant("undefined-result-code", f"refuses an unknown mission_type with MISSION_ACK type {UNDEFINED_RESULT}, "
+       "which is no MAV_MISSION_RESULT", {"MIS.ERR.01"}, server_mutant(_UndefinedUnsupportedCode))
+mutant("busy-after-error", "after answering a request beyond the list with INVALID_SEQUENCE, keeps the "
+       "download open", {"MIS.ERR.02"}, server_mutant(_BusyAfterInvalidRequest))

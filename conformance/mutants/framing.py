@@ -1,0 +1,65 @@
+"""Mutants that break the framing clauses (MIS.FRM.*)."""
+
+from __future__ import annotations
+
+from reference_impl.mission.items import MissionType
+from reference_impl.vehicle import VehicleNode
+
+from . import mutant, vehicle_mutant
+
+
+class _CorruptsRallyItems(VehicleNode):
+    """Every other rally MISSION_ITEM(_INT) leaves with a broken checksum (a GCS's resend
+    gets a good copy, so transfers still complete)."""
+
+    _rally_items = 0
+
+    def _send(self, actions):
+        endpoint = self.endpoint
+        for msg, to in actions:
+            before = len(endpoint._outbox)
+            endpoint.send(msg, to)
+            if msg._type in ("MISSION_ITEM_INT", "MISSION_ITEM") and msg.mission_type == MissionType.RALLY:
+                self._rally_items += 1
+                if self._rally_items % 2:
+                    endpoint._outbox[before:] = [(data[:-1] + bytes([data[-1] ^ 0x5A]), address)
+                                                 for data, address in endpoint._outbox[before:]]
+
+
+class _RepeatsPacketSeq(VehicleNode):
+    """Every 8th frame does not advance the packet sequence: the next frame repeats its seq."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        encoder = self.endpoint.encoder
+        encode = encoder.encode
+        count = [0]
+
+        def encode_repeating(msg, **kw):
+            data = encode(msg, **kw)
+            count[0] += 1
+            if count[0] % 8 == 0:
+                encoder._mav.seq = (encoder._mav.seq - 1) & 0xFF
+            return data
+
+        encoder.encode = encode_repeating
+
+
+class _HeartbeatOnce(VehicleNode):
+    """Sends its first HEARTBEAT (so it can be found), then never again."""
+
+    def poll(self, now):
+        sent = self._next_heartbeat is not None and now >= self._next_heartbeat
+        super().poll(now)
+        if sent:
+            self._next_heartbeat = None
+
+
+mutant("mavlink1", "speaks MAVLink 1 only, so no frame carries mission_type (or any other extension)",
+       {"MIS.FRM.01", "MIS.TYP.02"}, vehicle_mutant(VehicleNode, mavlink_version=1))
+mutant("corrupts-rally-items", "sends every other rally item with a bad checksum",
+       {"MIS.FRM.02"}, vehicle_mutant(_CorruptsRallyItems))
+mutant("repeats-packet-seq", "every 8th frame repeats the packet sequence number of the one before",
+       {"MIS.FRM.03"}, vehicle_mutant(_RepeatsPacketSeq))
+mutant("heartbeat-once", "sends one HEARTBEAT at start-up and no more",
+       {"MIS.FRM.04"}, vehicle_mutant(_HeartbeatOnce))
