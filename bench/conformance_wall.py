@@ -5,8 +5,9 @@ Three runs, all against the spec reference vehicle:
 2. builtin:spec: the vehicle in this process, real UDP loopback;
 3. udp:127.0.0.1:PORT: the vehicle in a separate process (`mavconform vehicle`).
 For the real-time runs it prints the sum of waits the clauses force (windows the tester
-must watch in full: a silent upload's retries, "no more requests" silences, the 1 Hz
-MISSION_CURRENT stream) and the ratio (wall - discovery) / forced. Discovery is the wait
+must watch in full: a silent upload's retries, "no more requests" silences; and waits whose
+length the target sets: the next message of its 1 Hz MISSION_CURRENT or HEARTBEAT stream,
+its item timeout) and the ratio (wall - discovery) / forced. Discovery is the wait
 for the target's first HEARTBEAT, whose 1 Hz period the target sets (an in-process
 vehicle is told where we are, so it costs nothing there). Goal: <= 1.25, i.e. no slack
 sleeping; every other wait ends on the event it waits for.

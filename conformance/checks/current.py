@@ -93,7 +93,7 @@ def failed_set_current_keeps_current(s: Session) -> None:
     before = 1 if t.poll_for(_current_is(1), t.timings.default_timeout) is not None else None
     if before is None:   # the vehicle did not move to 1 (MIS.CUR.01 judges that): read where it is
         t.mark()
-        frame = t.poll_for(CURRENT, STREAM_WAIT)
+        frame = t.poll_for(CURRENT, STREAM_WAIT, forced=True)
         if frame is None:
             raise PreconditionFailed("no MISSION_CURRENT came to read the current item from "
                                      "(MIS.CUR.06 judges the stream)")
@@ -101,7 +101,7 @@ def failed_set_current_keeps_current(s: Session) -> None:
     _set_current(t, BAD_SEQ)
     t.poll_for(STATUSTEXT, t.timings.default_timeout)   # the vehicle has handled it
     t.mark()
-    frame = t.poll_for(CURRENT, STREAM_WAIT)
+    frame = t.poll_for(CURRENT, STREAM_WAIT, forced=True)
     if frame is None:
         raise PreconditionFailed("no MISSION_CURRENT came after the failed set-current to read the "
                                  "current item from (MIS.CUR.06 judges the stream)")

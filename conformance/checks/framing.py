@@ -197,7 +197,7 @@ def heartbeat_is_regular(s: Session) -> None:
                 out.append(at)
         return out[::-1]
 
-    t.driver.run_until(lambda: len(heartbeats()) >= 2, timeout=max(0.0, closes - t.now()))
+    t.wait_until(lambda: len(heartbeats()) >= 2, max(0.0, closes - t.now()) / t.scale)
     seen = [round(at - opened, 3) for at in heartbeats() if at <= closes]
     t.note(f"HEARTBEATs at {seen} s into a {HEARTBEAT_WINDOW * t.scale:g} s window")
     if len(seen) < 2:

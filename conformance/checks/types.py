@@ -198,7 +198,7 @@ def other_type_item_not_taken_into_upload(s: Session) -> None:
             t.send(m.item_message(items[seq], t.target))
     t.note(f"answer the request for mission item {k} with a FENCE item of seq {k}")
     t.send(m.item_message(intruder, t.target))
-    frame = t.poll_for(mission_reply, t.timings.default_timeout)
+    frame = t.poll_for(mission_reply, t.timings.default_timeout, forced=True)   # the item timeout
     if frame is None:
         raise ClauseFailed(f"after a FENCE item of seq {k} the mission upload went silent; expected "
                            f"mission item {k} to be requested again")

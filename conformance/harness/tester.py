@@ -84,14 +84,27 @@ class Tester:
             raise ClauseFailed(f"expected {match} within {within:g} s; {self._last_seen()}")
         return found
 
-    def poll_for(self, match: Match, within: float) -> Frame | None:
-        """Like `expect`, but None (not a failure) if nothing matching arrives."""
+    def poll_for(self, match: Match, within: float, *, forced: bool = False) -> Frame | None:
+        """Like `expect`, but None (not a failure) if nothing matching arrives. `forced`:
+        the wait's length is set by the target (its stream period, its item timeout), so
+        it counts as forced waiting, not as the suite's own time."""
         within *= self.scale
         found = self._find(match)
         if found is None:
+            started = self.now()
             self.driver.run_until(lambda: self._find(match, peek=True) is not None, timeout=within)
             found = self._find(match)
+            if forced:
+                self.forced_wait += self.now() - started
         return found
+
+    def wait_until(self, condition: Callable[[], bool], within: float, *, forced: bool = True) -> bool:
+        """Run until `condition()` holds or `within` seconds (scaled) pass."""
+        started = self.now()
+        held = self.driver.run_until(condition, timeout=within * self.scale)
+        if forced:
+            self.forced_wait += self.now() - started
+        return held
 
     def expect_silence(self, match: Match, for_: float) -> None:
         """Nothing matching may arrive for `for_` seconds (scaled); fails the clause if it does."""
