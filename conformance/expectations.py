@@ -41,7 +41,7 @@ class Deviation:
 
 def resolve(name_or_path: str) -> Path:
     path = Path(name_or_path)
-    if path.suffix != ".toml" and "/" not in name_or_path:
+    if path.suffix != ".toml" and "/" not in name_or_path and not path.is_file():
         bundled = BUNDLED / f"{name_or_path}.toml"
         if bundled.is_file():
             return bundled

@@ -70,10 +70,16 @@ def mavlink_session(request: pytest.FixtureRequest):
     from .runner import _restore, _snapshot
     from .session import Session
     from reference_impl.net.capture import McapCapture
+    from reference_impl.errors import UsageError
     p = _prepared(request.config)
     capture = McapCapture(p.report_dir / "run.mcap") if p.report_dir is not None else None
-    session = Session(p.uri, scale=p.options.time_scale, capture=capture,
-                      allow_flight=True if request.config.getoption("--mavlink-allow-flight") else None)
+    try:
+        session = Session(p.uri, scale=p.options.time_scale, capture=capture,
+                          allow_flight=True if request.config.getoption("--mavlink-allow-flight") else None)
+    except UsageError as exc:   # e.g. udpin: on an address we cannot bind
+        if capture is not None:
+            capture.close()
+        pytest.exit(f"mavconform: error: {exc}", returncode=pytest.ExitCode.USAGE_ERROR)
     started = dt.datetime.now(dt.timezone.utc)
     results: list = []
     _STATE["results"] = results
@@ -81,6 +87,12 @@ def mavlink_session(request: pytest.FixtureRequest):
         try:
             session.discover()
         except TargetUnresponsive as exc:
+            _STATE["dead"] = f"target unresponsive: {exc}"
+            from .outcome import ClauseResult, Outcome
+            results += [ClauseResult(c.id, Outcome.ERROR, f"target unresponsive: {exc}") for c in p.clauses]
+            if p.report_dir is not None:
+                _write(p, session, results, {"status": "skipped", "detail": "the target never answered"},
+                       started, capture)
             pytest.fail(f"target unresponsive: {exc}", pytrace=False)
         snapshot = _snapshot(session)
         yield session
@@ -115,9 +127,16 @@ def decide(session, clause, expected: dict, strict: bool) -> Any:
     """Run one clause and turn its outcome into pytest's vocabulary."""
     from .clause import Level
     from .gating import apply_expectations
-    from .outcome import Outcome
-    from .runner import run_one
+    from .outcome import ClauseResult, Outcome
+    from .runner import _still_alive, run_one
+    dead = _STATE.get("dead")
+    if dead is not None:   # as the CLI does: a dead target is not waited on clause after clause
+        _STATE.setdefault("results", []).append(ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}"))
+        pytest.fail(f"error: {clause.id} not run: {dead}", pytrace=False)
     result = run_one(session, clause)
+    if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive") \
+            and not _still_alive(session):
+        _STATE["dead"] = f"the target stopped answering during {clause.id}"
     apply_expectations([result], expected)
     _STATE.setdefault("results", []).append(result)
     text = f"{clause.id} ({clause.level.value}) {clause.title}: {result.detail}".rstrip(": ")

@@ -40,6 +40,7 @@ class RunOutcome:
     forced_wait_s: float
     unresponsive: str | None = None     # why the target was given up on, if it was
     discovery_s: float = 0.0            # waiting for the first HEARTBEAT (the target's period)
+    interrupted: bool = False           # Ctrl-C: the remaining clauses were skipped
     snapshot: dict[str, int] = field(default_factory=dict)
 
 
@@ -62,22 +63,35 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *,
 
     snapshot = _snapshot(session) if restore else None
     dead: str | None = None
+    interrupted = False
     for clause in clauses:
-        if dead is not None:
-            result = ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}")
+        if dead is not None or interrupted:
+            result = (ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}") if dead is not None
+                      else ClauseResult(clause.id, Outcome.SKIPPED, "not run: interrupted by the user"))
         else:
-            result = run_one(session, clause)
+            try:
+                result = run_one(session, clause)
+            except KeyboardInterrupt:   # stop, but still put the target back and report
+                interrupted = True
+                result = ClauseResult(clause.id, Outcome.SKIPPED, "interrupted by the user")
             if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
                 if not _still_alive(session):
                     dead = f"the target stopped answering during {clause.id}"
         results.append(result)
         if on_result:
             on_result(clause, result)
-    restore_status = (_restore(session, snapshot) if snapshot is not None and dead is None else
-                      {"status": "skipped", "detail": "target unresponsive" if dead else "not asked"})
+    if not restore:
+        restore_status = {"status": "skipped", "detail": "not asked (--no-restore)"}
+    elif dead is not None:
+        restore_status = {"status": "skipped", "detail": "target unresponsive"}
+    elif snapshot is None:
+        restore_status = {"status": "failed", "detail": "could not read the target's mission before "
+                          "the run, so what the run changed could not be put back"}
+    else:
+        restore_status = _restore(session, snapshot)
     forced = sum(t.forced_wait for t in session.testers())
     return RunOutcome(results, identity, restore_status, time.monotonic() - started, forced,
-                      unresponsive=dead, discovery_s=discovered)
+                      unresponsive=dead, discovery_s=discovered, interrupted=interrupted)
 
 
 def run_one(session: Session, clause: Clause) -> ClauseResult:
@@ -104,6 +118,10 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
         outcome, detail = Outcome.SKIPPED, str(exc)
     except PreconditionFailed as exc:
         outcome, detail = Outcome.ERROR, f"precondition: {exc}"
+        try:
+            session.t.check_alive()   # a setup step that got nothing from a dead target
+        except TargetUnresponsive as dead:
+            detail = f"target unresponsive: {dead}"
     except TargetUnresponsive as exc:
         outcome, detail = Outcome.ERROR, f"target unresponsive: {exc}"
     except Exception as exc:   # a bug in the check: ours, never the target's failure

@@ -13,6 +13,7 @@ from typing import Any, Callable
 from reference_impl.net.guard import GuardedNode
 from reference_impl.net.sim import CaptureHook, SimNetwork
 from reference_impl.net.udp import UdpDriver
+from reference_impl.net.uri import local_bind_for
 from reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.tester import Tester, record_traffic
@@ -74,7 +75,7 @@ class Session:
                     # its first HEARTBEAT to find a listener
                     self.vehicle.endpoint.add_address(tester_address)
                 elif uri.kind == "udp":
-                    self.driver.add_node(node)
+                    self.driver.add_node(node, bind=(local_bind_for(uri.udp.host), 0))
                     self.target_address = uri.udp.address
                     node.endpoint.add_address(self.target_address)
                 else:  # udpin: the target finds us
@@ -130,7 +131,8 @@ class Session:
                 self.driver.add_node("tester2", node)
                 self.driver.connect("tester2", "vehicle")
             else:
-                self.driver.add_node(node)
+                host = self.target_address[0] if isinstance(self.target_address, tuple) else "127.0.0.1"
+                self.driver.add_node(node, bind=(local_bind_for(host), 0))
             node.endpoint.add_address(self.target_address)
             tester = Tester(node, self.driver, scale=self.scale)
             tester.exchange = self.t.exchange

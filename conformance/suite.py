@@ -9,6 +9,7 @@ line and exit code 2.
 from __future__ import annotations
 
 import datetime as dt
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -38,8 +39,8 @@ class Prepared:
 
 def prepare(options: document.RunOptions, *, levels: str | None = None,
             report_dir: str | Path | None = None) -> Prepared:
-    if not options.time_scale > 0:
-        raise UsageError(f"--time-scale must be > 0, got {options.time_scale!r}")
+    if not (options.time_scale > 0 and math.isfinite(options.time_scale)):
+        raise UsageError(f"--time-scale must be a finite number > 0, got {options.time_scale!r}")
     uri = parse_target(options.target)
     clauses = catalogue.select(options.clauses, levels)
     if not clauses:

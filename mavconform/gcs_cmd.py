@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import ipaddress
 import sys
 from typing import Iterator
 
@@ -12,6 +11,7 @@ from reference_impl.files import Plan, check_writable, load_plan, plan_from_item
 from reference_impl.gcs import GcsConfig, GcsNode
 from reference_impl.mission.items import MissionType
 from reference_impl.mission.results import OperationResult
+from reference_impl.net.uri import local_bind_for
 from reference_impl.mission.timing import Timings
 from reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
 from reference_impl.session import GcsSession, TargetUnresponsive
@@ -108,19 +108,10 @@ def _session(args: argparse.Namespace, target: UdpUri) -> Iterator[GcsSession]:
     config = GcsConfig(system=args.system, timings=timings, download_int=not args.float)
     remote = target.address if target.mode == "udp" else None
     gcs = GcsNode(config, remote=remote, wall_clock=clock.wall)
-    bind = target.address if target.mode == "udpin" else (_local_for(target.host), 0)
+    bind = target.address if target.mode == "udpin" else (local_bind_for(target.host), 0)
     with UdpDriver(clock=clock) as driver:
         driver.add_node(gcs, bind=bind)   # bind first: a bad address leaves no capture file
         with capture_to(driver, args.capture):
             yield GcsSession(driver, gcs)
 
 
-def _local_for(host: str) -> str:
-    """Bind next to the target: loopback for a loopback target, any interface otherwise."""
-    try:
-        ip = ipaddress.ip_address(host)
-    except ValueError:
-        return "127.0.0.1" if host == "localhost" else "0.0.0.0"
-    if ip.is_loopback:
-        return str(ip)
-    return "::" if ip.version == 6 else "0.0.0.0"

@@ -68,6 +68,9 @@ def run(args: argparse.Namespace) -> int:
     if run_outcome.unresponsive and run_outcome.identity is None:
         print(f"mavconform: target unresponsive: {run_outcome.unresponsive}", file=sys.stderr)
     _summary(doc, args.report_dir)
+    if run_outcome.interrupted:
+        print("mavconform: interrupted; the clauses not run are marked skipped", file=sys.stderr)
+        return 130
     return 0 if doc["summary"]["verdict"] == "pass" else 1
 
 

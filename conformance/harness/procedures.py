@@ -21,6 +21,7 @@ from .match import Match, ack, msg, request
 from .tester import Tester
 
 RETRIES = 5
+MAX_ITEMS = 5000   # the largest plan read back (restoring a bigger one is left to the user)
 
 
 @dataclass
@@ -89,9 +90,11 @@ def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Do
     if count_frame is None:
         return None
     count = count_frame.msg.count
+    if count > MAX_ITEMS:
+        return None   # more than any check uploads: not read (a truncated copy would mislead)
     items: list[MissionItem] = []
     want = "MISSION_ITEM_INT" if as_int else "MISSION_ITEM"
-    for seq in range(min(count, 5000)):
+    for seq in range(count):
         frame = None
         for _ in range(RETRIES + 1):
             t.send(m.request_message(seq, mission_type, t.target, as_int=as_int))

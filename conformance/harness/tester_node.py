@@ -18,7 +18,6 @@ from reference_impl.wire.frame import Frame
 MAV_TYPE_GCS = 6
 MAV_AUTOPILOT_INVALID = 8
 HEARTBEAT_PERIOD = 1.0
-MAX_INBOX = 200_000          # a run's worth; older frames are dropped first past this
 
 
 class TesterNode:
@@ -30,7 +29,6 @@ class TesterNode:
         self.endpoint = MavlinkEndpoint(system, component)
         self.target: tuple[int, int] | None = None
         self.inbox: list[tuple[float, Frame]] = []
-        self.dropped = 0                 # frames dropped from the front of a full inbox
         self.last_heard: float | None = None
         self.on_frame: Callable[[str, float, Frame], None] | None = None
         self.on_send: Callable[[str, Any], None] | None = None
@@ -44,9 +42,6 @@ class TesterNode:
             if target is not None and (frame.src_system, frame.src_component) != target:
                 continue
             self.last_heard = now
-            if len(self.inbox) >= MAX_INBOX:
-                del self.inbox[: MAX_INBOX // 10]
-                self.dropped += MAX_INBOX // 10
             self.inbox.append((now, frame))
             if self.on_frame is not None:
                 self.on_frame(self.name, now, frame)
@@ -54,7 +49,8 @@ class TesterNode:
     def poll(self, now: float) -> None:
         if self.heartbeats and self._next_heartbeat is not None and now >= self._next_heartbeat:
             self._next_heartbeat = now + HEARTBEAT_PERIOD
-            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3))
+            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3),
+                               self.target)
 
     def next_deadline(self) -> float | None:
         return self._next_heartbeat if self.heartbeats else None
@@ -64,7 +60,9 @@ class TesterNode:
 
     # --- scripted sending -----------------------------------------------------------------
     def send(self, msg: Any) -> None:
-        """Queue `msg` for every known address of the target (the driver flushes it)."""
-        self.endpoint.send(msg)
+        """Queue `msg` for the target: once its HEARTBEAT has been seen, to the address it
+        speaks from only (a configured `localhost` and the learned 127.0.0.1 are one target,
+        and strays we have heard from are not targets); before that, to the configured one."""
+        self.endpoint.send(msg, self.target)
         if self.on_send is not None:
             self.on_send(self.name, msg)

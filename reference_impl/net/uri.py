@@ -80,3 +80,14 @@ def _is_ip(text: str, *, version: int) -> bool:
         return ipaddress.ip_address(text).version == version
     except ValueError:
         return False
+
+
+def local_bind_for(host: str) -> str:
+    """Where to bind to reach `host`: loopback for a loopback target, any interface otherwise."""
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        return "127.0.0.1" if host == "localhost" else "0.0.0.0"
+    if ip.is_loopback:
+        return str(ip)
+    return "::" if ip.version == 6 else "0.0.0.0"

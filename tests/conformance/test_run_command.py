@@ -182,3 +182,26 @@ def test_no_reply_leaks_into_the_next_clause(tmp_path, capsys) -> None:
         first_tx = next(i for i, e in enumerate(events) if e["dir"] == "tx")
         early = [e["msg"] for e in events[:first_tx] if e["msg"] not in ("MISSION_CURRENT", "STATUSTEXT")]
         assert early == [], (clause["id"], early)
+
+
+def test_udp_localhost_target_in_another_process(tmp_path, capsys) -> None:
+    """Regression: `localhost` and the learned 127.0.0.1 were two addresses, so every
+    scripted message reached the target twice and correct targets failed."""
+    import re
+    vehicle = subprocess.Popen([sys.executable, "-m", "mavconform", "vehicle", "--listen", "udp:127.0.0.1:0",
+                                "--quiet", "--duration", "60"], stdout=subprocess.PIPE, text=True)
+    try:
+        port = re.search(r"udp:127\.0\.0\.1:(\d+)", vehicle.stdout.readline()).group(1)
+        code, out, _ = _run(capsys, "run", "--target", f"udp:localhost:{port}", "--clauses",
+                            "MIS.UP.0[26],MIS.DN.05,MIS.TYP.02", "--report-dir", str(tmp_path))
+    finally:
+        vehicle.terminate()
+        vehicle.wait(timeout=10)
+    assert code == 0, out
+
+
+def test_time_scale_does_not_fail_correct_timers(tmp_path, capsys) -> None:
+    """The target's own timers are not stretched: --time-scale widens the accepted bound only."""
+    code, out, _ = _run(capsys, "run", "--clauses", "MIS.UP.07,MIS.CUR.06", "--time-scale", "3", "--strict",
+                        "--report-dir", str(tmp_path))
+    assert code == 0, out
