@@ -187,12 +187,5 @@ def new_upload_after_cancel_starts_at_0(s: Session) -> None:
 def _finish_upload(t: Tester, items: list[MissionItem]):
     """Answer item 0 and every later mission request; the final mission MISSION_ACK, or None
     if the vehicle falls silent first."""
-    reply = request(mission_type=MT) | ack(mission_type=MT)
     t.send(m.item_message(items[0], t.target))
-    for _ in range((len(items) + 2) * (RETRIES + 2)):
-        frame = t.poll_for(reply, t.timings.default_timeout)
-        if frame is None or frame.msg._type == "MISSION_ACK":
-            return frame
-        if 0 <= frame.msg.seq < len(items):
-            t.send(m.item_message(items[frame.msg.seq], t.target))
-    return None
+    return procedures.serve_upload(t, items)

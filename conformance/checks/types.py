@@ -228,12 +228,5 @@ def other_type_item_not_taken_into_upload(s: Session) -> None:
 def _finish(t: Tester, items: list[MissionItem], first: int):
     """Answer every mission request from `first` on; the final mission MISSION_ACK, or None
     if the vehicle falls silent first."""
-    reply = request(mission_type=MT) | ack(mission_type=MT)
     t.send(m.item_message(items[first], t.target))
-    for _ in range((len(items) + 2) * (RETRIES + 2)):
-        frame = t.poll_for(reply, t.timings.default_timeout)
-        if frame is None or frame.msg._type == "MISSION_ACK":
-            return frame
-        if 0 <= frame.msg.seq < len(items):
-            t.send(m.item_message(items[frame.msg.seq], t.target))
-    return None
+    return procedures.serve_upload(t, items)

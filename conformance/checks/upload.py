@@ -45,14 +45,11 @@ def _reach(t: Tester, items: list[MissionItem], seq: int) -> None:
 
 def _serve(t: Tester, items: list[MissionItem], *, as_int: bool = True):
     """Answer whatever the vehicle requests until its MISSION_ACK, which is returned."""
-    reply = request(mission_type=MT) | ack(mission_type=MT)
-    for _ in range(4 * len(items) + 8):
-        frame = t.expect(reply)
-        if frame.msg._type == "MISSION_ACK":
-            return frame
-        if 0 <= frame.msg.seq < len(items):
-            _answer(t, items, frame.msg.seq, as_int=as_int)
-    raise ClauseFailed(f"the vehicle kept requesting items of a {len(items)}-item upload without ending it")
+    frame = procedures.serve_upload(t, items, as_int=as_int)
+    if frame is None:
+        t.check_alive()
+        raise ClauseFailed(f"the {len(items)}-item upload stalled or never ended: no MISSION_ACK")
+    return frame
 
 
 def _finish(t: Tester, items: list[MissionItem], *, first: int = 0, as_int: bool = True):

@@ -66,6 +66,21 @@ def upload(t: Tester, items: list[MissionItem], mission_type: MissionType, *,
     return None
 
 
+def serve_upload(t: Tester, items: list[MissionItem], mission_type: MissionType = MissionType.MISSION, *,
+                 as_int: bool = True) -> Frame | None:
+    """Answer whatever the vehicle requests of a running upload of `items` until its
+    MISSION_ACK, which is returned; None if it falls silent for the reply timeout first."""
+    mt = int(mission_type)
+    reply = request(mission_type=mt) | ack(mission_type=mt)
+    for _ in range((len(items) + 2) * (RETRIES + 2)):   # bounded: a vehicle that never ends
+        frame = t.poll_for(reply, t.timings.default_timeout)
+        if frame is None or frame.msg._type == "MISSION_ACK":
+            return frame
+        if 0 <= frame.msg.seq < len(items):
+            t.send(m.item_message(items[frame.msg.seq], t.target, as_int=as_int))
+    return None
+
+
 def ensure_plan(t: Tester, items: list[MissionItem], mission_type: MissionType) -> None:
     """Put `items` on the target as its `mission_type` plan, or make the clause undecided."""
     frame = upload(t, items, mission_type)
