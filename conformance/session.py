@@ -29,6 +29,9 @@ def build_vehicle(uri: TargetUri) -> VehicleNode:
     if uri.kind == "mutant":
         from .mutants import MUTANTS
         return MUTANTS[uri.name].build(VehicleConfig())
+    if uri.name != "spec":
+        from reference_impl.profiles import load_profile
+        return load_profile(uri.name).vehicle()
     return VehicleNode(VehicleConfig())
 
 

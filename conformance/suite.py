@@ -19,6 +19,7 @@ from reference_impl.net.capture import McapCapture
 
 from . import catalogue, document, expectations, gating
 from .clause import Clause
+from .outcome import ClauseResult
 from .runner import OnResult, RunOutcome, run_clauses
 from .session import Session
 from .target_uri import TargetUri, parse_target
@@ -64,6 +65,15 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
             restore: bool = True, on_result: OnResult | None = None) -> tuple[dict[str, Any], RunOutcome]:
     """Run the prepared clauses; return the run document (reports written if asked)."""
     started = dt.datetime.now(dt.timezone.utc)
+    if p.expected:
+        # Judge each result against the expectations as it comes, so the live line already
+        # says KNOWN (or "deviation no longer observed"), as the reports will.
+        shown = on_result
+
+        def on_result(clause: Clause, result: ClauseResult) -> None:
+            gating.apply_expectations([result], p.expected)
+            if shown is not None:
+                shown(clause, result)
     capture = None
     if p.report_dir is not None:
         capture = McapCapture(p.report_dir / CAPTURE_NAME)

@@ -1,6 +1,8 @@
 """Target URIs: which vehicle the suite talks to.
 
 - `builtin:spec`       our reference vehicle, in this process, over real UDP loopback;
+  `builtin:px4`, `builtin:ardupilot`: the same with a PX4-like or ArduPilot-like profile
+                       (reference_impl/profiles, VARIANTS.md);
 - `mutant:NAME`        a reference vehicle with one behaviour broken (the negative controls;
                        `mavconform clauses --mutants` lists them), also over loopback;
 - `udp:HOST:PORT`      a target listening at HOST:PORT; we send first (our HEARTBEAT);
@@ -15,9 +17,9 @@ from dataclasses import dataclass
 
 from reference_impl.errors import UsageError
 from reference_impl.net.uri import UdpUri, parse_udp_uri
+from reference_impl.profiles import BUILTIN_PROFILES
 
-FORMS = "builtin:spec, mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT"
-BUILTIN_PROFILES = ("spec",)
+FORMS = "builtin:spec|px4|ardupilot, mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT"
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,8 @@ import sys
 
 from reference_impl.errors import LocalProtocolError, UsageError
 
-from . import __version__, clauses_cmd, demo_cmd, gcs_cmd, report_cmd, run_cmd, vehicle_cmd
+from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, gcs_cmd, profiles_cmd,
+               report_cmd, run_cmd, vehicle_cmd)
 
 EXIT_USAGE = 2
 
@@ -36,6 +37,8 @@ def build_parser() -> argparse.ArgumentParser:
     vehicle_cmd.add_parser(sub)
     gcs_cmd.add_parser(sub)
     demo_cmd.add_parser(sub)
+    profiles_cmd.add_parser(sub)
+    fault_table_cmd.add_parser(sub)
     return parser
 
 

@@ -9,6 +9,7 @@ from typing import Iterator
 
 from reference_impl.files import Plan, check_writable, load_plan, plan_from_items, plan_types_in, save_plan
 from reference_impl.gcs import GcsConfig, GcsNode
+from reference_impl.mission.adaptations import NAMED
 from reference_impl.mission.items import MissionType
 from reference_impl.mission.results import OperationResult
 from reference_impl.net.uri import local_bind_for
@@ -22,8 +23,11 @@ DESCRIPTION = """\
 Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
   udp:HOST:PORT    the vehicle listens there (our reference vehicle, a SITL with a UDP server)
   udpin:HOST:PORT  we listen there and the vehicle sends to us first (as PX4/ArduPilot SITL do)
-The vehicle is found by its HEARTBEAT. Exit 0 when every operation succeeded, 1 when one
-failed or the target never answered, 2 for a usage mistake.
+The vehicle is found by its HEARTBEAT, whose autopilot field also picks how the GCS adapts
+to it (ArduPilot: home at seq 0, non-terminating NACKs, ...; PX4: ...; anything else: the
+spec-exact GCS); --adapt fixes the choice. The adaptations that acted are printed at the end.
+Exit 0 when every operation succeeded, 1 when one failed or the target never answered, 2 for
+a usage mistake.
 """
 
 TYPE_NAMES = {"mission": MissionType.MISSION, "fence": MissionType.FENCE,
@@ -63,6 +67,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        help="download with MISSION_REQUEST / MISSION_ITEM instead of the _INT "
                             "messages (uploads always answer in the form the vehicle asks for)")
         p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
+        p.add_argument("--adapt", choices=("auto", *NAMED), default="auto",
+                       help="how to adapt to the vehicle: auto (from its HEARTBEAT autopilot, the "
+                            "default), none (spec-exact), or the set for px4 / ardupilot")
         p.set_defaults(run=run)
 
 
@@ -78,10 +85,14 @@ def run(args: argparse.Namespace) -> int:
         except TargetUnresponsive as exc:
             print(f"error: {target}: {exc}", file=sys.stderr)
             return 1
-        print(f"target {session.gcs.target[0]}/{session.gcs.target[1]} at {target}")
+        gcs = session.gcs
+        print(f"target {gcs.target[0]}/{gcs.target[1]} at {target}")
+        armed = ", ".join(a.id for a in gcs.adaptations.armed()) or "none"
+        print(f"adaptations: {gcs.adaptations.name} ({armed})")
         results = _operate(args, session, plan)
     for r in results:
         print(f"{'ok  ' if r.ok else 'FAIL'} {r.summary()}  [{r.finished - r.started:.2f} s, {r.retries} retries]")
+    print(f"adaptations used: {', '.join(gcs.adaptations_used) or 'none'}")
     return 0 if results and all(r.ok for r in results) else 1
 
 
@@ -105,7 +116,8 @@ def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -
 def _session(args: argparse.Namespace, target: UdpUri) -> Iterator[GcsSession]:
     clock = MonotonicClock()
     timings = Timings().scaled(args.time_scale)
-    config = GcsConfig(system=args.system, timings=timings, download_int=not args.float)
+    config = GcsConfig(system=args.system, timings=timings, download_int=not args.float,
+                       adaptations=None if args.adapt == "auto" else NAMED[args.adapt])
     remote = target.address if target.mode == "udp" else None
     gcs = GcsNode(config, remote=remote, wall_clock=clock.wall)
     bind = target.address if target.mode == "udpin" else (local_bind_for(target.host), 0)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import signal
 from typing import Any, Iterator
 
 from reference_impl.net import FaultModel, McapCapture, parse_drop_rule
@@ -66,8 +67,8 @@ def add_fault_options(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--dup", type=probability, default=0.0, metavar="P", help="duplication probability")
     g.add_argument("--reorder", type=probability, default=0.0, metavar="P",
                    help="probability a datagram is held back so later ones overtake it")
-    g.add_argument("--delay-ms", type=non_negative, default=0.0, metavar="MS", help="one-way latency")
-    g.add_argument("--jitter-ms", type=non_negative, default=0.0, metavar="MS", help="extra random latency 0..MS")
+    g.add_argument("--delay-ms", "--delay", type=non_negative, default=0.0, metavar="MS", help="one-way latency")
+    g.add_argument("--jitter-ms", "--jitter", type=non_negative, default=0.0, metavar="MS", help="extra random latency 0..MS")
     g.add_argument("--corrupt", type=probability, default=0.0, metavar="P", help="probability of flipped bytes")
     g.add_argument("--drop", action="append", default=[], metavar="RULE",
                    help="drop by message: NAME (every one), NAME#N (the Nth), NAME#N+ (Nth onwards); "
@@ -108,3 +109,21 @@ def capture_to(driver: Any, path: str | None) -> Iterator[None]:
         yield
     finally:
         capture.close()
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM (how services and CI jobs are stopped, and the only way to stop a background
+    job whose SIGINT the shell ignores) stops a serving command as Ctrl-C
+    does: counts printed, capture closed."""
+    def interrupt(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:   # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)

@@ -3,17 +3,21 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 
-from reference_impl.mission.behaviour import ServerBehaviour
 from reference_impl.mission.items import MissionType
 from reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
-from reference_impl.vehicle import VehicleConfig, VehicleNode
+from reference_impl.profiles import BUILTIN_PROFILES, load_profile
+from reference_impl.vehicle import VehicleNode
 
-from .options import add_fault_options, capture_to, describe_faults, fault_model, mavlink_id, positive, seq_number
+from .options import (add_fault_options, capture_to, describe_faults, fault_model, mavlink_id, positive,
+                      seq_number, sigterm_as_interrupt)
 
 DESCRIPTION = """\
-Serve the spec-exact reference vehicle on UDP until interrupted (or --duration).
+Serve the reference vehicle on UDP until interrupted (or --duration): spec-exact by
+default, or PX4-like / ArduPilot-like / your own with --profile (`mavconform profiles`
+lists what each changes, with the VARIANTS.md row and source of every knob).
 It sends HEARTBEAT at 1 Hz, serves mission / geofence / rally upload, download, clear and
 set-current, streams MISSION_CURRENT, and flies the mission in real time after
 MAV_CMD_MISSION_START (or at once with --autostart). Any GCS that talks to it is served.
@@ -22,6 +26,8 @@ MAV_CMD_MISSION_START (or at once with --autostart). Any GCS that talks to it is
 EPILOG = """\
 examples:
   mavconform vehicle --listen udp:127.0.0.1:14550
+  mavconform vehicle --profile ardupilot               # home at seq 0, non-atomic upload, ...
+  mavconform vehicle --profile my-fork.toml            # base = "px4" plus your overrides
   mavconform vehicle --listen udp:127.0.0.1:0 --loss 0.1 --reorder 0.05 --seed 7
   mavconform vehicle --connect udp:127.0.0.1:14551     # talk first to a GCS listening there
 """
@@ -35,10 +41,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="where to listen: udp:HOST:PORT (port 0: any free port; default %(default)s)")
     p.add_argument("--connect", metavar="URI",
                    help="also send to a GCS that listens at udp:HOST:PORT (as SITL does)")
+    p.add_argument("--profile", default="spec", metavar="NAME|FILE",
+                   help=f"vehicle profile: {', '.join(BUILTIN_PROFILES)} or a profile TOML file "
+                        "(default %(default)s)")
     p.add_argument("--system", type=mavlink_id, default=1, help="system id (default 1)")
     p.add_argument("--component", type=mavlink_id, default=1, help="component id (default 1)")
-    p.add_argument("--capacity", type=seq_number, default=1000, metavar="N",
-                   help="most mission items stored; more gets MAV_MISSION_NO_SPACE (default 1000)")
+    p.add_argument("--capacity", type=seq_number, metavar="N",
+                   help="most mission items stored; more gets MAV_MISSION_NO_SPACE (default: the profile's, 1000)")
     p.add_argument("--autostart", action="store_true", help="start flying as soon as a mission is accepted")
     p.add_argument("--speed", type=positive, default=10.0, metavar="M/S", help="flight speed (default 10)")
     p.add_argument("--duration", type=positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
@@ -51,9 +60,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     listen = parse_udp_uri(args.listen, listen=True)
     connect = parse_udp_uri(args.connect) if args.connect else None
-    capacity = {**ServerBehaviour().capacity, MissionType.MISSION: args.capacity}
-    config = VehicleConfig(system=args.system, component=args.component, autostart=args.autostart,
-                           speed=args.speed, behaviour=ServerBehaviour(capacity=capacity))
+    profile = load_profile(args.profile)
+    behaviour = profile.behaviour
+    if args.capacity is not None:
+        behaviour = dataclasses.replace(behaviour, capacity={**behaviour.capacity, MissionType.MISSION: args.capacity})
+    config = dataclasses.replace(profile.config, system=args.system, component=args.component,
+                                 autostart=args.autostart, speed=args.speed, behaviour=behaviour)
     faults = fault_model(args)
     clock = MonotonicClock()
     vehicle = VehicleNode(config, wall_clock=clock.wall)
@@ -62,22 +74,28 @@ def run(args: argparse.Namespace) -> int:
         if connect is not None:
             vehicle.endpoint.add_address(connect.address)
         with capture_to(driver, args.capture):   # after the bind: a bad address leaves no file
-            print(f"reference vehicle {args.system}/{args.component} listening on "
+            print(f"reference vehicle {args.system}/{args.component} (profile {profile.name}) listening on "
                   f"udp:{address[0]}:{address[1]} (faults: {describe_faults(args)})", flush=True)
             _serve(driver, vehicle, clock, args)
     return 0
 
 
 def _serve(driver: UdpDriver, vehicle: VehicleNode, clock: MonotonicClock, args: argparse.Namespace) -> None:
-    """Run until --duration (or Ctrl-C), printing the vehicle's plan events as they happen."""
+    """Run until --duration (or Ctrl-C or SIGTERM), printing the vehicle's plan events as they happen."""
     end = None if args.duration is None else clock.now() + args.duration
     try:
-        while end is None or clock.now() < end:
-            step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))
-            driver.run_until(lambda: bool(vehicle.events), timeout=step)
-            for event in vehicle.events:
-                if not args.quiet:
-                    print(event, flush=True)
-            vehicle.events.clear()
+        with sigterm_as_interrupt():
+            _relay(driver, vehicle, end, clock, args)
     except KeyboardInterrupt:
         print("stopped", file=sys.stderr)
+
+
+def _relay(driver: UdpDriver, vehicle: VehicleNode, end: float | None, clock: MonotonicClock,
+           args: argparse.Namespace) -> None:
+    while end is None or clock.now() < end:
+        step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))
+        driver.run_until(lambda: bool(vehicle.events), timeout=step)
+        for event in vehicle.events:
+            if not args.quiet:
+                print(event, flush=True)
+        vehicle.events.clear()

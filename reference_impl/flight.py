@@ -60,6 +60,7 @@ class FlightSim:
         if self.store.count(MissionType.MISSION) == 0:
             return []
         self.progress.running, self.progress.complete = True, False
+        self.progress.seq = max(self.progress.seq, self.progress.first_seq)   # past a home item
         self._jumps_left = {}
         out = self.progress.announce(now)
         self._plan_leg(now)

@@ -3,6 +3,9 @@
 A `DatagramNode` like the vehicle. The target vehicle is either given or discovered from
 the first HEARTBEAT of an autopilot (not another GCS). Operations are started with the
 time (`upload(..., now)`); results collect in `results` in the order they finish.
+
+How the GCS adapts to the vehicle (adaptations.py) is chosen from the target's HEARTBEAT
+`autopilot` field, as QGroundControl picks its firmware plugin, unless the config fixes it.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from typing import Any, Callable, Sequence
 
 from .endpoint import MavlinkEndpoint
 from .mission.actions import Finished, Peer
+from .mission.adaptations import NONE, Adaptations, for_autopilot
 from .mission.client import MissionClient
 from .mission.items import MissionItem, MissionType
 from .mission.results import OperationResult
@@ -37,6 +41,8 @@ class GcsConfig:
     download_int: bool = True
     mavlink_version: int = 2
     signing: SigningKey | None = None
+    # How to adapt to the vehicle; None: chosen from its HEARTBEAT autopilot (for_autopilot)
+    adaptations: Adaptations | None = None
 
 
 class GcsNode:
@@ -51,6 +57,7 @@ class GcsNode:
         self.target_heartbeat: Any = None
         self.client: MissionClient | None = None
         self.results: list[OperationResult] = []
+        self.adaptations: Adaptations = cfg.adaptations or NONE
         self.received: list[Any] = []   # every message from the target (the first 10 000)
         self._next_heartbeat: float | None = 0.0
         if self.target is not None:
@@ -96,6 +103,7 @@ class GcsNode:
                 continue
             if frame.msg._type == "HEARTBEAT":
                 self.target_heartbeat = frame.msg
+                self._adapt_to(frame.msg)
             if self.client is not None:
                 self._run(self.client.handle(frame, now))
             if len(self.received) < 10_000:
@@ -123,12 +131,29 @@ class GcsNode:
         if frame.name == "HEARTBEAT" and msg.type != MAV_TYPE_GCS and msg.autopilot != MAV_AUTOPILOT_INVALID:
             self.target = frame.source
             self.target_heartbeat = msg
+            self._adapt_to(msg)
             self._make_client()
+
+    @property
+    def adaptations_used(self) -> tuple[str, ...]:
+        """Ids of the adaptations that acted so far (in operations or between them), first use first."""
+        return tuple(self.client.used) if self.client is not None else ()
+
+    def _adapt_to(self, heartbeat: Any) -> None:
+        """Pick the adaptation set for the target's autopilot (between operations only)."""
+        if self.config.adaptations is not None:
+            return
+        chosen = for_autopilot(heartbeat.autopilot)
+        if chosen != self.adaptations and not self.busy:
+            self.adaptations = chosen
+            if self.client is not None:
+                self.client.adaptations = chosen
 
     def _make_client(self) -> None:
         cfg = self.config
         self.client = MissionClient(cfg.system, cfg.component, self.target, cfg.timings,
-                                    upload_int=cfg.upload_int, download_int=cfg.download_int)
+                                    upload_int=cfg.upload_int, download_int=cfg.download_int,
+                                    adaptations=self.adaptations)
 
     def _require_client(self) -> MissionClient:
         if self.client is None:

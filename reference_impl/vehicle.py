@@ -16,7 +16,8 @@ from .mission import messages as m
 from .mission.actions import Send
 from .mission.behaviour import ServerBehaviour
 from .mission.constants import Cmd, CommandResult
-from .mission.items import PLAN_TYPES, MissionType
+from .mission.constants import Cmd as _Cmd
+from .mission.items import PLAN_TYPES, MissionItem, MissionType
 from .mission.server import MissionServer
 from .net.node import Address
 from .wire.dialect import mavlink as _d
@@ -41,6 +42,8 @@ class VehicleConfig:
     mavlink_version: int = 2
     signing: SigningKey | None = None
     require_signature: bool = False
+    # HEARTBEAT.autopilot (MAV_AUTOPILOT): GCSs adapt to it (generic 4, ArduPilot 3, PX4 12)
+    autopilot: int = MAV_AUTOPILOT_GENERIC_MISSION_FULL
 
 
 class VehicleNode:
@@ -54,6 +57,7 @@ class VehicleNode:
                                         signing=cfg.signing, require_signature=cfg.require_signature,
                                         wall_clock=wall_clock)
         self.server = server_class(cfg.system, cfg.component, cfg.behaviour)
+        self.server.home = home_item(cfg.home)
         self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed)
         self.frames_received = 0
         self.events: list[str] = []   # human-readable log of plan changes, for the CLI
@@ -158,7 +162,7 @@ class VehicleNode:
     def _heartbeat(self) -> Any:
         flying = self.flight.flying
         return _d.MAVLink_heartbeat_message(
-            MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_GENERIC_MISSION_FULL, MODE_FLAG_AUTO if flying else 1, 0,
+            MAV_TYPE_QUADROTOR, self.config.autopilot, MODE_FLAG_AUTO if flying else 1, 0,
             MAV_STATE_ACTIVE if flying else MAV_STATE_STANDBY, 3)
 
     def _position(self, now: float) -> Any:
@@ -166,3 +170,10 @@ class VehicleNode:
         return _d.MAVLink_global_position_int_message(
             int(now * 1000) & 0xFFFFFFFF, round(p.lat * 1e7), round(p.lon * 1e7),
             round(p.alt * 1000), round((p.alt - self.config.home.alt) * 1000), 0, 0, 0, 0xFFFF)
+
+
+def home_item(home: Position) -> MissionItem:
+    """The vehicle's home as the mission item a plan that holds it at seq 0 serves
+    (MAV_FRAME_GLOBAL: absolute altitude)."""
+    return MissionItem(0, 0, _Cmd.NAV_WAYPOINT, x=round(home.lat * 1e7), y=round(home.lon * 1e7),
+                       z=float(home.alt))

@@ -1,8 +1,9 @@
 """The server's behaviour knobs: everything a profile may change, as data.
 
-The spec profile is the default of every field. PX4-like and ArduPilot-like profiles (a
-later issue) are instances of this class with each changed knob citing its VARIANTS.md
-row; engine code reads knobs and never asks which autopilot it is imitating.
+The spec profile is the default of every field. PX4-like and ArduPilot-like profiles
+(`reference_impl/profiles/*.toml`) are instances of this class with each changed knob
+citing its VARIANTS.md row; engine code reads knobs and never asks which autopilot it is
+imitating.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from dataclasses import dataclass, field
 
 from .constants import MissionResult
 from .items import PLAN_TYPES, MissionType
+from .store import STORAGE_FORMS
 from .timing import Timings
 from .validation import SPEC_RULES, ItemRule
 
@@ -41,6 +43,87 @@ class ServerBehaviour:
     notify_upload_give_up: bool = True
     # MISSION_CURRENT stream period (upstream: "streamed all the time (nominally at 1Hz)").
     current_period: float = 1.0
+
+    # --- upload ---------------------------------------------------------------------------
+    # Collect an upload aside and replace the plan whole after the last item (seed 000).
+    # False: MISSION_COUNT truncates the stored plan at once and each item is written as it
+    # arrives, so a failed upload leaves a mix of old and new.
+    atomic_upload: bool = True
+    # An item the vehicle refuses ends the upload (seed 000: errors are unrecoverable).
+    # False: the error ACK is sent and the vehicle goes on requesting.
+    nack_ends_upload: bool = True
+    # Answer an out-of-sequence item with this MISSION_ACK (the upload goes on); None: drop it.
+    out_of_sequence_reply: MissionResult | None = None
+    # Re-request the expected item at once when a later one arrives (seed 000); False:
+    # leave it to the item timeout.
+    rerequest_gap: bool = True
+    # Resends of one request are capped at `timings.max_retries`; False: resend until
+    # `timings.protocol_timeout` passes without a message from the partner.
+    retry_cap: bool = True
+    # STATUSTEXT (WARNING) sent with the give-up of a silent upload; "" for none.
+    give_up_statustext: str = ""
+    # A MISSION_ACK from the GCS (e.g. OPERATION_CANCELLED) ends its running upload.
+    honour_cancel_upload: bool = True
+    # An item of another plan type, sent by the partner of a running upload, is answered
+    # with this MISSION_ACK (for the running transfer's type); None: treated as a stray.
+    foreign_type_item_reply: MissionResult | None = None
+    # The form of the vehicle's requests follows the GCS's items (MISSION_ITEM switches to
+    # MISSION_REQUEST), and a MISSION_ACK UNSUPPORTED mid-upload flips the form and resends.
+    follow_gcs_int_mode: bool = False
+    # MISSION_WRITE_PARTIAL_LIST rewrites a range of the stored plan (start..end inclusive).
+    partial_write: bool = False
+
+    # --- download -------------------------------------------------------------------------
+    # A download is a transfer: it belongs to its GCS until that GCS's MISSION_ACK (or a
+    # long silence). False: requests are answered whenever they come and the GCS's final
+    # ACK means nothing (no download state).
+    stateful_download: bool = True
+    # Requests must come in order: seq == next answers, seq == next-1 resends, any other
+    # seq ends the download with MISSION_ACK ERROR. False: any stored seq is answered.
+    sequential_download: bool = False
+    # While an upload of a type runs, MISSION_REQUEST_LIST / MISSION_REQUEST(_INT) /
+    # MISSION_WRITE_PARTIAL_LIST for that type get DENIED, from its own partner too.
+    deny_reads_during_upload: bool = False
+
+    # --- plan content ---------------------------------------------------------------------
+    # Mission plans hold the vehicle's home at seq 0: a download's item 0 is the home
+    # position, the uploaded item 0 is not kept as sent, flights start at seq 1 and
+    # MISSION_CURRENT.total is count - 1.
+    home_at_seq0: bool = False
+    # How items are kept: "exact" (as received), or "compact15": a 15-byte command record
+    # (altitude in whole cm, hold time in whole seconds, other waypoint params dropped,
+    # rally altitude in whole metres, *_INT frames reported as their plain frames).
+    item_storage: str = "exact"
+    # Report plan ids (opaque_id, MISSION_CURRENT mission_id/fence_id/rally_points_id).
+    # False: the older dialect without them (the fields go out as zero, which MAVLink 2's
+    # trailing-zero truncation makes byte-identical to a frame without the fields).
+    opaque_id_fields: bool = True
+
+    # --- clear, set current, progress -----------------------------------------------------
+    # MISSION_CLEAR_ALL with MAV_MISSION_TYPE_ALL clears every type; False: UNSUPPORTED.
+    clear_all_supported: bool = True
+    # The mission plan may be cleared while it is being flown; False: MISSION_ACK ERROR.
+    clear_while_flying: bool = True
+    # MISSION_SET_CURRENT is refused (STATUSTEXT) while any transfer is in progress.
+    set_current_only_idle: bool = False
+    # MISSION_ITEM_REACHED is sent this many times for each item reached, 1 s apart.
+    item_reached_repeats: int = 1
+
+    # --- framing and warnings -------------------------------------------------------------
+    # Plan types whose transfers need MAVLink 2: a MAVLink 1 frame about them gets
+    # STATUSTEXT "Need mavlink2 for item transfer" and MISSION_ACK UNSUPPORTED.
+    mavlink2_types: frozenset[MissionType] = frozenset()
+    # A STATUSTEXT warning, once per transfer, when the GCS uses MISSION_REQUEST or
+    # MISSION_ITEM instead of the _INT forms.
+    legacy_warnings: bool = False
+
+    def __post_init__(self) -> None:
+        if self.item_storage not in STORAGE_FORMS:
+            raise ValueError(f"item_storage must be one of {sorted(STORAGE_FORMS)}, got {self.item_storage!r}")
+        if self.item_reached_repeats < 1:
+            raise ValueError("item_reached_repeats must be >= 1")
+        if not self.retry_cap and self.timings.protocol_timeout is None:
+            raise ValueError("retry_cap=False needs timings.protocol_timeout (else retries never end)")
 
     @property
     def download_idle_timeout(self) -> float:

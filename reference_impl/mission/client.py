@@ -8,7 +8,15 @@ Who retries what (seed 000, "Timeouts and Retries"): the GCS resends MISSION_COU
 MISSION_REQUEST_LIST, MISSION_CLEAR_ALL and its item requests on a download; on an upload
 the vehicle drives with its requests, and the GCS resends the item it last sent only when
 the vehicle has gone quiet (this is how a lost final ACK is recovered). Out-of-sequence
-items on a download are dropped and the expected one re-requested.
+items on a download are dropped and the expected one re-requested (once per request, so a
+vehicle that keeps sending the wrong item cannot start an endless volley). A MISSION_ACK
+OPERATION_CANCELLED that comes before the vehicle has answered our opening message is about
+an earlier transfer (its reply to a late stray copy) and does not end the operation; if
+every resend is in vain it is the NACK reported.
+
+Vehicles that depart from the spec are met with `Adaptations` (adaptations.py): knobs read
+here, chosen outside from the vehicle's HEARTBEAT. Each operation records the adaptations
+that changed what it did, and its result lists them.
 """
 
 from __future__ import annotations
@@ -21,8 +29,13 @@ from ..errors import LocalProtocolError
 from ..wire.frame import Frame
 from . import messages as m
 from .actions import Finished, Peer, Send
+from .adaptations import (CLEAR_TYPES_SEPARATELY, FINISH_RESTARTED_UPLOAD, HOME_AT_SEQ0,
+                          IGNORE_NONTERMINATING_NACK, ITEM_INT_FOR_REQUEST, LONG_VEHICLE_TIMEOUT,
+                          AWAIT_ACCEPT_AFTER_NACK, NON_ATOMIC_UPLOAD, NONE,
+                          RESTART_DOWNLOAD_ON_ERROR, RETRY_REFUSED_SET_CURRENT, Adaptations,
+                          home_placeholder)
 from .constants import Cmd, CommandResult, MissionResult, Severity
-from .items import MissionItem, MissionType, renumber
+from .items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType, renumber
 from .results import Operation, OperationResult, Outcome
 from .timing import Timings
 from .transitions import CLIENT_TRANSITIONS, ClientEvent, ClientState
@@ -40,6 +53,9 @@ ITEM_DEFECT_CODES = frozenset({
     MissionResult.INVALID_PARAM4, MissionResult.INVALID_PARAM5_X, MissionResult.INVALID_PARAM6_Y,
     MissionResult.INVALID_PARAM7,
 })
+
+# NACKs that refuse an operation's opening message itself (nothing was changed by it).
+_REFUSALS = frozenset({MissionResult.NO_SPACE, MissionResult.DENIED, MissionResult.UNSUPPORTED})
 
 _S, _E = ClientState, ClientEvent
 
@@ -64,6 +80,24 @@ class _Op:
     consecutive: int = 0
     max_consecutive: int = 0
     deadline: float | None = None
+    home: int = 0                  # 1: the vehicle keeps home at seq 0 of this plan (wire = plan + 1)
+    clearing: MissionType | None = None                          # clear: the type in flight
+    clear_queue: list[MissionType] = field(default_factory=list)  # clear: types still to clear
+    cleared: list[MissionType] = field(default_factory=list)     # clear: types already cleared
+    gap_rerequested: bool = False  # download: a gap was re-requested since the last request
+    wrong_item: tuple[int, int] | None = None  # download: (got, wanted) of the last wrong item
+    last_progress: float = 0.0     # upload: when the vehicle last moved on
+    wait_from: float = 0.0         # upload: when the current wait for a request began
+    waiting_out: bool = False      # upload: retries spent, waiting out the vehicle's timeout
+    last_nack: int | None = None   # a NACK ignored by an adaptation (reported if we give up)
+    restarts: int = 0              # download: restarts after a vehicle error
+    refusal: str = ""              # set current: the vehicle's last refusal, being retried
+    held_nack: bool = False        # upload: a NACK after the last item, waiting for ACCEPTED
+    used: list[str] = field(default_factory=list)  # ids of adaptations that acted
+
+    def use(self, adaptation_id: str) -> None:
+        if adaptation_id not in self.used:
+            self.used.append(adaptation_id)
 
 
 class MissionClient:
@@ -71,7 +105,8 @@ class MissionClient:
 
     def __init__(self, system: int, component: int, target: Peer,
                  timings: Timings | None = None, *, upload_int: bool = True,
-                 download_int: bool = True, answer_request_with_int: bool = False) -> None:
+                 download_int: bool = True, answer_request_with_int: bool = False,
+                 adaptations: Adaptations = NONE) -> None:
         self.system = system
         self.component = component
         self.target = target
@@ -79,10 +114,14 @@ class MissionClient:
         self.upload_int = upload_int              # what we send when asked with MISSION_REQUEST_INT
         self.download_int = download_int          # request items with MISSION_REQUEST_INT
         self.answer_request_with_int = answer_request_with_int  # MISSION_REQUEST -> ITEM_INT
+        self.adaptations = adaptations            # read at every step; replace only while idle
         self.state = ClientState.IDLE
         # the last moves, for diagnosis and for tests that walk the transition table
         self.history: deque[tuple[ClientState, ClientEvent, ClientState]] = deque(maxlen=256)
         self.stray_replies = 0
+        self.used: dict[str, None] = {}   # ids of adaptations that ever acted, first use first
+        # FINISH_RESTARTED_UPLOAD: the wire items of the last successful upload per plan type
+        self._served: dict[MissionType, list[MissionItem]] = {}
         self._op: _Op | None = None
 
     # --- starting operations --------------------------------------------------------------
@@ -92,7 +131,14 @@ class MissionClient:
 
     def upload(self, mission_type: MissionType, items: Sequence[MissionItem], now: float) -> list[Action]:
         op = self._start(Operation.UPLOAD, mission_type, now, _E.START_UPLOAD)
+        self._served.pop(op.mission_type, None)
         op.items = renumber(items, mission_type)
+        op.last_progress = now
+        if op.items and self.adaptations.home_offset(op.mission_type):
+            # Seed 000 / A1: the vehicle's seq 0 is home, so the plan goes out from seq 1.
+            op.home = 1
+            op.items = renumber([home_placeholder(op.items), *op.items], mission_type)
+            op.use(HOME_AT_SEQ0.id)
         op.count = len(op.items)
         # An empty upload is applied by its MISSION_COUNT alone (count 0 = clear), so from
         # here on the vehicle may have acted on it, as after the last item of a longer one.
@@ -101,17 +147,28 @@ class MissionClient:
 
     def download(self, mission_type: MissionType, now: float) -> list[Action]:
         op = self._start(Operation.DOWNLOAD, mission_type, now, _E.START_DOWNLOAD)
+        op.home = self.adaptations.home_offset(op.mission_type)
         return self._send_and_wait(op, m.request_list_message(mission_type, self.target), now)
 
     def clear(self, mission_type: MissionType, now: float) -> list[Action]:
         op = self._start(Operation.CLEAR, mission_type, now, _E.START_CLEAR)
+        for t in (PLAN_TYPES if op.mission_type is MissionType.ALL else (op.mission_type,)):
+            self._served.pop(t, None)
+        if op.mission_type is MissionType.ALL and self.adaptations.clear_types_separately:
+            op.use(CLEAR_TYPES_SEPARATELY.id)
+            op.clear_queue = list(PLAN_TYPES)
+            return self._clear_next(op, now)
+        op.clearing = op.mission_type
         return self._send_and_wait(op, m.clear_all_message(mission_type, self.target), now)
 
     def set_current(self, seq: int, now: float, *, via_command: bool = False) -> list[Action]:
         op = self._start(Operation.SET_CURRENT, MissionType.MISSION, now, _E.START_SET_CURRENT)
-        op.seq, op.via_command = seq, via_command
-        msg = (m.set_current_command(seq, self.target) if via_command
-               else m.set_current_message(seq, self.target))
+        op.home = self.adaptations.home_offset(MissionType.MISSION)
+        if op.home:
+            op.use(HOME_AT_SEQ0.id)
+        op.seq, op.via_command = seq + op.home, via_command   # op.seq: as the vehicle counts
+        msg = (m.set_current_command(op.seq, self.target) if via_command
+               else m.set_current_message(op.seq, self.target))
         return self._send_and_wait(op, msg, now)
 
     def cancel(self, now: float) -> list[Action]:
@@ -141,12 +198,14 @@ class MissionClient:
         if getattr(msg, "target_system", 0) not in (0, self.system):
             return []
         op = self._op
+        if name in (m.REQUEST_INT, m.REQUEST_FLOAT):
+            if op is not None and op.operation is Operation.UPLOAD and msg.mission_type == op.mission_type:
+                return self._on_request(op, msg, now)
+            return self._late_request(op, msg)
         if op is None:
-            return self._idle_reply(msg, name)
+            return []
         if name == "MISSION_ACK":
             return self._on_ack(op, msg, now)
-        if op.operation is Operation.UPLOAD and name in (m.REQUEST_INT, m.REQUEST_FLOAT):
-            return self._on_request(op, msg, now)
         if op.operation is Operation.DOWNLOAD:
             if name == "MISSION_COUNT":
                 return self._on_count(op, msg, now)
@@ -160,20 +219,43 @@ class MissionClient:
         op = self._op
         if op is None or op.deadline is None or now < op.deadline:
             return []
-        if op.consecutive >= self.timings.max_retries:
+        if op.held_nack:
+            return self._finish(now, Outcome.NACK, nack=_result(op.last_nack), unknown=True, detail=(
+                f"vehicle answered {MissionResult.describe(op.last_nack)} after the last item, "
+                "and no ACCEPTED followed"))
+        if op.waiting_out or op.consecutive >= self.timings.max_retries:
+            if self._wait_out_vehicle(op, now):
+                return []
+            if op.refusal:
+                return self._finish(now, Outcome.REJECTED, unknown=True,
+                                    detail=f"{op.refusal} ({op.consecutive} retries)")
+            if op.last_nack is not None:
+                return self._finish(now, Outcome.NACK, nack=_result(op.last_nack),
+                                    unknown=self._upload_unknown(op, op.last_nack), detail=(
+                    f"vehicle kept answering {MissionResult.describe(op.last_nack)} "
+                    f"({op.consecutive} retries)"))
             what = {Operation.UPLOAD: "no request or final ACK from the vehicle",
                     Operation.DOWNLOAD: "no reply from the vehicle",
                     Operation.CLEAR: "no MISSION_ACK", Operation.SET_CURRENT: "no MISSION_CURRENT"}
             unknown = (op.operation is Operation.CLEAR
                        or (op.operation is Operation.UPLOAD and op.last_item_sent)
                        or op.operation is Operation.SET_CURRENT)
-            return self._finish(now, Outcome.TIMEOUT, unknown=unknown,
-                                detail=f"{what[op.operation]} after {op.consecutive} retries")
+            detail = f"{what[op.operation]} after {op.consecutive} retries"
+            if op.wrong_item is not None:
+                got, wanted = op.wrong_item
+                detail = (f"vehicle answered the request for seq {wanted} with seq {got} "
+                          f"({op.consecutive} retries)")
+            return self._finish(now, Outcome.TIMEOUT, unknown=unknown or self._upload_unknown(op),
+                                detail=detail)
         op.retries += 1
         op.consecutive += 1
         op.max_consecutive = max(op.max_consecutive, op.consecutive)
         self._move(_E.TIMEOUT_RETRY)
+        if self._lengthened_wait():
+            op.use(LONG_VEHICLE_TIMEOUT.id)   # this resend came later than it would have
+        op.wait_from = now
         op.deadline = now + self._timeout_for(op)
+        op.gap_rerequested = False
         return [self._to_target(op.last_sent)]
 
     def next_deadline(self) -> float | None:
@@ -185,24 +267,38 @@ class MissionClient:
             return []  # a request about another plan type is not about this upload
         if msg.seq >= op.count:
             out = [self._to_target(m.ack_message(MissionResult.INVALID_SEQUENCE, op.mission_type, self.target))]
-            return out + self._finish(now, Outcome.PROTOCOL_ERROR,
+            return out + self._finish(now, Outcome.PROTOCOL_ERROR, unknown=self._upload_unknown(op),
                                       detail=f"vehicle requested seq {msg.seq} of a {op.count}-item upload")
         op.answers += 1
         if op.answers > (op.count + 1) * (self.timings.max_retries + 1) * 2:
-            return self._finish(now, Outcome.PROTOCOL_ERROR, unknown=op.last_item_sent, detail=(
+            return self._finish(now, Outcome.PROTOCOL_ERROR,
+                                unknown=op.last_item_sent or self._upload_unknown(op), detail=(
                 f"vehicle requested items {op.answers} times for a {op.count}-item upload"))
         self._move(_E.REQUEST)
         seq = msg.seq
-        as_int = self.upload_int if msg._type == m.REQUEST_INT else self.answer_request_with_int
+        if msg._type == m.REQUEST_INT:
+            as_int = self.upload_int
+        elif self.answer_request_with_int:
+            as_int = True
+        else:
+            as_int = self.adaptations.item_int_for_request
+            if as_int:
+                op.use(ITEM_INT_FOR_REQUEST.id)
         item_msg = m.item_message(op.items[seq], self.target, as_int=as_int)
         if seq == op.count - 1:
             op.last_item_sent = True
         op.last_sent = item_msg
+        if self._lengthened_wait() and now - op.wait_from > self.timings.default_timeout:
+            op.use(LONG_VEHICLE_TIMEOUT.id)   # without it we would have resent already
         # Progress (the vehicle moving on) restarts the wait; repeated or backward requests
         # are answered but do not, so a vehicle stuck on one item cannot keep us forever.
         if seq > op.highest_request or seq == op.last_request + 1:
+            op.wait_from = now
             op.consecutive = 0
-            op.deadline = now + self.timings.default_timeout
+            op.waiting_out = False
+            op.last_nack = None
+            op.last_progress = now
+            op.deadline = now + self._timeout_for(op)
         op.highest_request = max(op.highest_request, seq)
         op.last_request = seq
         return [self._to_target(item_msg)]
@@ -211,11 +307,14 @@ class MissionClient:
         if msg.mission_type != op.mission_type or self.state is not _S.DOWNLOAD_LIST_SENT:
             return []  # a duplicate COUNT, or one for another plan type
         op.count, op.opaque_id = msg.count, getattr(msg, "opaque_id", 0)
+        op.last_nack = None
         self._move(_E.COUNT)
         if op.count == 0:
             ack = self._to_target(m.ack_message(MissionResult.ACCEPTED, op.mission_type, self.target))
             return [ack] + self._finish(now, Outcome.SUCCESS, items=())
         op.consecutive = 0
+        if op.home:
+            op.use(HOME_AT_SEQ0.id)
         return self._request_expected(op, now)
 
     def _on_item(self, op: _Op, msg: Any, now: float) -> list[Action]:
@@ -228,6 +327,12 @@ class MissionClient:
             self._move(_E.ITEM_OUT_OF_SEQUENCE)
             if msg.seq < op.expected:
                 return []
+            # Once per request: a vehicle that keeps answering with the wrong item must not
+            # draw an endless request/item volley; the request timer carries on from there.
+            op.wrong_item = (msg.seq, op.expected)
+            if op.gap_rerequested:
+                return []
+            op.gap_rerequested = True
             return [self._to_target(m.request_message(
                 op.expected, op.mission_type, self.target, as_int=self.download_int))]
         if msg.mission_type != op.mission_type:
@@ -245,34 +350,63 @@ class MissionClient:
         op.items.append(item)
         op.expected += 1
         op.consecutive = 0
+        op.wrong_item = None
         if op.expected < op.count:
             return self._request_expected(op, now)
         ack = self._to_target(m.ack_message(MissionResult.ACCEPTED, op.mission_type, self.target))
-        return [ack] + self._finish(now, Outcome.SUCCESS, items=tuple(op.items))
+        items = op.items[op.home:] if op.home else op.items   # drop the vehicle's home
+        return [ack] + self._finish(now, Outcome.SUCCESS, items=tuple(renumber(items)))
 
     def _on_ack(self, op: _Op, msg: Any, now: float) -> list[Action]:
         if op.operation is Operation.SET_CURRENT:
             return []
-        if msg.mission_type != op.mission_type and not (
-                op.operation is Operation.CLEAR and msg.mission_type == MissionType.ALL):
+        if op.operation is Operation.CLEAR:
+            if msg.mission_type not in (op.clearing, MissionType.ALL):
+                return []  # an ACK about another plan type
+            if _stale_for_clear(msg):
+                return []  # a late copy of an earlier operation's ACK
+        elif msg.mission_type != op.mission_type:
             return []  # an ACK about another plan type
+        if (msg.type == MissionResult.OPERATION_CANCELLED
+                and self.state in (_S.UPLOAD_COUNT_SENT, _S.DOWNLOAD_LIST_SENT, _S.CLEAR_SENT)):
+            # Nothing of this operation has started on the vehicle's side yet, so a cancel is
+            # about an earlier transfer (its reply to a late stray copy). Our resends go on;
+            # if they are all in vain, this is the NACK reported.
+            op.last_nack = msg.type
+            return []
+        if msg.type != MissionResult.ACCEPTED and self._nack_ignored(op, msg.type, now):
+            return []
+        if (msg.type == MissionResult.ERROR and op.operation is Operation.DOWNLOAD
+                and self.adaptations.restart_download_on_error and op.restarts < self.timings.max_retries):
+            return self._restart_download(op, now)
         if msg.type != MissionResult.ACCEPTED:
             # After the last item went out the vehicle may already have committed, and a
             # generic error can be its idle reply to a late duplicate; only a code about the
             # item itself proves the upload was refused.
             unknown = (op.operation is Operation.UPLOAD and op.last_item_sent
                        and msg.type not in ITEM_DEFECT_CODES)
-            return self._finish(now, Outcome.NACK, nack=_result(msg.type), unknown=unknown,
-                                detail=f"vehicle answered {MissionResult.describe(msg.type)}")
+            detail = f"vehicle answered {MissionResult.describe(msg.type)}"
+            if op.cleared:
+                # clearing type by type: those before this one are gone already
+                unknown = True
+                detail += (f" to clearing the {op.clearing.label}; already cleared: "
+                           f"{', '.join(t.label for t in op.cleared)}")
+            return self._finish(now, Outcome.NACK, nack=_result(msg.type),
+                                unknown=unknown or self._upload_unknown(op, msg.type), detail=detail)
         if op.operation is Operation.CLEAR:
+            if op.clear_queue:
+                op.cleared.append(op.clearing)
+                return self._clear_next(op, now)
             return self._finish(now, Outcome.SUCCESS)
         if op.operation is Operation.UPLOAD:
             if op.last_item_sent:
+                if self.adaptations.finish_restarted_upload and op.items:
+                    self._served[op.mission_type] = op.items
                 return self._finish(now, Outcome.SUCCESS, opaque_id=getattr(msg, "opaque_id", 0))
             if self.state is _S.UPLOAD_COUNT_SENT:
                 return []  # before any request: a late copy from an earlier operation
-            return self._finish(now, Outcome.PROTOCOL_ERROR, detail=(
-                f"vehicle sent ACK ACCEPTED before requesting item {op.count - 1}"))
+            return self._finish(now, Outcome.PROTOCOL_ERROR, unknown=self._upload_unknown(op), detail=(
+                f"vehicle sent ACK ACCEPTED before requesting seq {op.count - 1}"))
         return []  # ACCEPTED during a download means nothing
 
     def _on_set_current_reply(self, op: _Op, msg: Any, name: str, now: float) -> list[Action]:
@@ -283,19 +417,41 @@ class MissionClient:
         if name == "STATUSTEXT" and msg.severity <= Severity.WARNING and not op.via_command:
             # the message form's only failure notice (seed 000); the command has COMMAND_ACK
             text = msg.text.decode(errors="replace") if isinstance(msg.text, bytes) else msg.text
-            return self._finish(now, Outcome.REJECTED, detail=f"vehicle said: {text}")
+            return self._set_current_refused(op, f"vehicle said: {text.rstrip(chr(0))}", now)
         if (name == "COMMAND_ACK" and msg.command == Cmd.DO_SET_MISSION_CURRENT
                 and msg.result != CommandResult.ACCEPTED):
-            return self._finish(now, Outcome.REJECTED, detail=f"COMMAND_ACK result {msg.result}")
+            return self._set_current_refused(op, f"COMMAND_ACK result {msg.result}", now)
         return []
 
-    def _idle_reply(self, msg: Any, name: str) -> list[Action]:
-        """A request while we run no upload: the vehicle missed our cancel or timed out."""
-        if name in (m.REQUEST_INT, m.REQUEST_FLOAT):
-            self.stray_replies += 1
-            return [self._to_target(m.ack_message(
-                MissionResult.OPERATION_CANCELLED, msg.mission_type, self.target))]
-        return []
+    def _set_current_refused(self, op: _Op, why: str, now: float) -> list[Action]:
+        if not self.adaptations.retry_refused_set_current:
+            return self._finish(now, Outcome.REJECTED, detail=why)
+        # P12/P2': a transfer the vehicle still holds for us blocks it; end that transfer,
+        # and let the timer resend the set-current (it gives up after max_retries).
+        op.use(RETRY_REFUSED_SET_CURRENT.id)
+        op.refusal = why
+        return [self._to_target(m.ack_message(MissionResult.OPERATION_CANCELLED, t, self.target))
+                for t in PLAN_TYPES]
+
+    def _late_request(self, op: _Op | None, msg: Any) -> list[Action]:
+        """A request outside an upload of its type: the vehicle missed our cancel or timed
+        out, or (FINISH_RESTARTED_UPLOAD) a late copy of our MISSION_COUNT restarted an upload
+        that had already succeeded."""
+        served = self._served.get(PLAN_TYPE_BY_VALUE.get(msg.mission_type))
+        if served is not None and msg.seq < len(served):
+            self._use(op, FINISH_RESTARTED_UPLOAD.id)
+            as_int = msg._type == m.REQUEST_INT or self.adaptations.item_int_for_request
+            return [self._to_target(m.item_message(served[msg.seq], self.target, as_int=as_int))]
+        if op is not None:
+            return []   # busy with something else: the vehicle's own timeout ends its transfer
+        self.stray_replies += 1
+        return [self._to_target(m.ack_message(
+            MissionResult.OPERATION_CANCELLED, msg.mission_type, self.target))]
+
+    def _use(self, op: _Op | None, adaptation_id: str) -> None:
+        if op is not None:
+            op.use(adaptation_id)
+        self.used.setdefault(adaptation_id, None)
 
     # --- helpers --------------------------------------------------------------------------
     def _start(self, operation: Operation, mission_type: MissionType, now: float,
@@ -313,13 +469,92 @@ class MissionClient:
         return [self._to_target(msg)]
 
     def _request_expected(self, op: _Op, now: float) -> list[Action]:
+        op.gap_rerequested = False
         msg = m.request_message(op.expected, op.mission_type, self.target, as_int=self.download_int)
         return self._send_and_wait(op, msg, now)
 
     def _timeout_for(self, op: _Op) -> float:
         if self.state is _S.DOWNLOAD_REQUESTING:
             return self.timings.item_timeout
+        if self._lengthened_wait():
+            # A5: wait out the vehicle's own re-request (~1 s on ArduPilot) before resending.
+            return 2 * self.adaptations.vehicle_request_interval
         return self.timings.default_timeout
+
+    def _lengthened_wait(self) -> bool:
+        """Whether LONG_VEHICLE_TIMEOUT stretches the wait for the vehicle's next request."""
+        interval = self.adaptations.vehicle_request_interval
+        return (self.state is _S.UPLOAD_SENDING and interval is not None
+                and 2 * interval > self.timings.default_timeout)
+
+    def _wait_out_vehicle(self, op: _Op, now: float) -> bool:
+        """Our retries are spent on an upload, but the vehicle may still be inside its own
+        (longer) transfer timeout: wait, without resending, until that has surely passed,
+        so its own give-up reaches us and both ends stop together. False: give up now."""
+        vehicle_timeout = self.adaptations.vehicle_timeout
+        if op.operation is not Operation.UPLOAD or vehicle_timeout is None:
+            return False
+        until = op.last_progress + vehicle_timeout + self.timings.default_timeout
+        if op.waiting_out or now >= until:
+            return False
+        op.use(LONG_VEHICLE_TIMEOUT.id)
+        op.waiting_out = True
+        op.deadline = until
+        return True
+
+    def _nack_ignored(self, op: _Op, code: int, now: float) -> bool:
+        """Whether an adaptation says this NACK does not end the operation."""
+        adapt = self.adaptations
+        if (op.operation is Operation.UPLOAD and adapt.ignore_nonterminating_nack
+                and (code == MissionResult.INVALID_SEQUENCE
+                     or (code == MissionResult.DENIED and self.state is _S.UPLOAD_SENDING))):
+            # A3: the vehicle refused one stray copy of an item and carries on requesting.
+            op.use(IGNORE_NONTERMINATING_NACK.id)
+            return True
+        if (op.operation is Operation.UPLOAD and adapt.await_accept_after_nack and op.last_item_sent
+                and code not in ITEM_DEFECT_CODES and op.count > 0):
+            # The committed vehicle's answer to a late duplicate item can overtake its ACCEPTED.
+            if not op.held_nack:
+                op.use(AWAIT_ACCEPT_AFTER_NACK.id)
+                op.held_nack, op.last_nack = True, code
+                op.deadline = now + self.timings.default_timeout
+            return True
+        if (code == MissionResult.DENIED and adapt.vehicle_timeout is not None
+                and self.state in (_S.UPLOAD_COUNT_SENT, _S.DOWNLOAD_LIST_SENT, _S.CLEAR_SENT)
+                and now < op.started + adapt.vehicle_timeout + self.timings.default_timeout):
+            # A4/A8: the vehicle may still hold a transfer we (or another GCS) abandoned, which
+            # it ends only on its own timeout; our resends go on until that has passed.
+            op.use(LONG_VEHICLE_TIMEOUT.id)
+            op.last_nack = code
+            return True
+        return False
+
+    def _restart_download(self, op: _Op, now: float) -> list[Action]:
+        """P6: the vehicle ended the download (a stale copy of an earlier request reached it
+        out of order); ask for the list again and start over from item 0."""
+        op.use(RESTART_DOWNLOAD_ON_ERROR.id)
+        op.restarts += 1
+        op.items, op.count, op.expected, op.consecutive, op.wrong_item = [], 0, 0, 0, None
+        self._move(_E.RESTART)
+        return self._send_and_wait(op, m.request_list_message(op.mission_type, self.target), now)
+
+    def _upload_unknown(self, op: _Op, code: int | None = None) -> bool:
+        """A2: a failed upload to a non-atomic vehicle may have left a mix of old and new,
+        unless the vehicle refused the MISSION_COUNT itself."""
+        if op.operation is not Operation.UPLOAD or not self.adaptations.non_atomic_upload:
+            return False
+        if code in _REFUSALS and self.state is _S.UPLOAD_COUNT_SENT:
+            return False
+        op.use(NON_ATOMIC_UPLOAD.id)
+        return True
+
+    def _clear_next(self, op: _Op, now: float) -> list[Action]:
+        """A10: clear the next plan type on its own."""
+        if op.clearing is not None:
+            self._move(_E.CLEAR_NEXT)
+        op.clearing = op.clear_queue.pop(0)
+        op.consecutive = 0
+        return self._send_and_wait(op, m.clear_all_message(op.clearing, self.target), now)
 
     def _finish(self, now: float, outcome: Outcome, *, items: tuple | None = None,
                 opaque_id: int | None = None, nack: Any = None, detail: str = "",
@@ -328,11 +563,13 @@ class MissionClient:
         assert op is not None
         self._move(_E.FINISH)
         self._op = None
+        self.used.update(dict.fromkeys(op.used))
         result = OperationResult(
             operation=op.operation, mission_type=op.mission_type, outcome=outcome,
             items=items, opaque_id=op.opaque_id if opaque_id is None else opaque_id,
             nack=nack, retries=op.retries, max_consecutive_retries=op.max_consecutive,
-            outcome_unknown=unknown, detail=detail, started=op.started, finished=now)
+            outcome_unknown=unknown, detail=detail, started=op.started, finished=now,
+            adaptations=tuple(op.used))
         return [Finished(result)]
 
     def _to_target(self, msg: Any) -> Send:
@@ -345,6 +582,22 @@ class MissionClient:
             raise LocalProtocolError(f"client: no transition for {event.name} in {self.state.name}") from None
         self.history.append((self.state, event, new_state))
         self.state = new_state
+
+
+# Codes a vehicle gives only about an item or a count: never the answer to MISSION_CLEAR_ALL
+# (UNSUPPORTED is: a plan type, or MAV_MISSION_TYPE_ALL, the vehicle does not clear).
+_NOT_A_CLEAR_ANSWER = (ITEM_DEFECT_CODES - {MissionResult.UNSUPPORTED}) | {
+    MissionResult.INVALID_SEQUENCE, MissionResult.NO_SPACE}
+
+
+def _stale_for_clear(msg: Any) -> bool:
+    """MISSION_ACK carries no operation id, so a late copy of an earlier operation's ACK can
+    arrive while a clear waits. Two kinds can be told apart: an ACCEPTED that names a plan
+    (`opaque_id` != 0: an upload's final ACK; a cleared plan has id 0), and a NACK whose
+    code is only ever about an item or a count (found by the protocol fuzzer)."""
+    if msg.type == MissionResult.ACCEPTED:
+        return bool(getattr(msg, "opaque_id", 0))
+    return msg.type in _NOT_A_CLEAR_ANSWER
 
 
 def _result(code: int) -> MissionResult | int:

@@ -15,16 +15,32 @@ from .items import MissionType
 from .store import MissionStore
 
 MODE_UNKNOWN, MODE_MISSION, MODE_SUSPENDED = 0, 1, 2
+REACHED_REPEAT_PERIOD = 1.0   # s between repeats of MISSION_ITEM_REACHED (item_reached_repeats)
 
 
 class MissionProgress:
-    def __init__(self, store: MissionStore, period: float) -> None:
+    """`home_at_seq0`: item 0 is the vehicle's home, so the mission starts at 1 and
+    MISSION_CURRENT.total is count - 1 (VARIANTS.md A1). `report_ids`: MISSION_CURRENT
+    carries the plan ids (else zero: A19). `reached_repeats`: MISSION_ITEM_REACHED is sent
+    this many times, 1 s apart (P13)."""
+
+    def __init__(self, store: MissionStore, period: float, *, home_at_seq0: bool = False,
+                 report_ids: bool = True, reached_repeats: int = 1) -> None:
         self.store = store
         self.period = period
+        self.home_at_seq0 = home_at_seq0
+        self.report_ids = report_ids
+        self.reached_repeats = reached_repeats
         self.seq = 0
         self.running = False
         self.complete = False
         self._next_stream: float | None = 0.0
+        self._repeat: tuple[int, int, float] | None = None   # (seq, sends left, next at)
+
+    @property
+    def first_seq(self) -> int:
+        """Where a flight of the stored plan starts."""
+        return 1 if self.home_at_seq0 and self.store.count(MissionType.MISSION) > 1 else 0
 
     @property
     def state(self) -> MissionState:
@@ -34,14 +50,16 @@ class MissionProgress:
             return MissionState.COMPLETE
         if self.running:
             return MissionState.ACTIVE
-        return MissionState.NOT_STARTED if self.seq == 0 else MissionState.PAUSED
+        return MissionState.NOT_STARTED if self.seq == self.first_seq else MissionState.PAUSED
 
     def current_message(self):
         store = self.store
         count = store.count(MissionType.MISSION)
         total = count if count else 0xFFFF  # upstream: UINT16_MAX if no mission is present
+        if count and self.home_at_seq0:
+            total = count - 1
         ids = (store.opaque_id(MissionType.MISSION), store.opaque_id(MissionType.FENCE),
-               store.opaque_id(MissionType.RALLY))
+               store.opaque_id(MissionType.RALLY)) if self.report_ids else (0, 0, 0)
         mode = MODE_MISSION if self.running else MODE_SUSPENDED
         return m.current_message(self.seq, total, int(self.state), mode, ids)
 
@@ -57,12 +75,15 @@ class MissionProgress:
 
     def plan_replaced(self, now: float) -> list[Send]:
         """A new flight plan was committed (or cleared): start again from item 0."""
-        self.seq, self.running, self.complete = 0, False, False
+        self.seq, self.running, self.complete = self.first_seq, False, False
+        self._repeat = None
         return self.announce(now)
 
     def reached(self, seq: int, now: float) -> list[Send]:
         """The vehicle reached item `seq`: say so, then move on to the next item."""
         out = [Send(m.item_reached_message(seq))]
+        if self.reached_repeats > 1:
+            self._repeat = (seq, self.reached_repeats - 1, now + REACHED_REPEAT_PERIOD)
         if seq + 1 < self.store.count(MissionType.MISSION):
             self.seq = seq + 1
         else:
@@ -70,9 +91,16 @@ class MissionProgress:
         return out + self.announce(now)
 
     def next_deadline(self) -> float | None:
+        if self._repeat is not None and (self._next_stream is None or self._repeat[2] < self._next_stream):
+            return self._repeat[2]
         return self._next_stream
 
     def poll(self, now: float) -> list[Send]:
+        out: list[Send] = []
+        if self._repeat is not None and now >= self._repeat[2]:
+            seq, left, _ = self._repeat
+            out.append(Send(m.item_reached_message(seq)))
+            self._repeat = (seq, left - 1, now + REACHED_REPEAT_PERIOD) if left > 1 else None
         if self._next_stream is not None and now >= self._next_stream:
-            return self.announce(now)
-        return []
+            out += self.announce(now)
+        return out

@@ -4,7 +4,9 @@ Success carries its data; a failure says precisely what happened. `outcome_unkno
 honest answer to the two-generals corner: when the last item (or MISSION_CLEAR_ALL) was
 sent but no ACCEPTED came back (silence, or a generic error that may be the idle vehicle's
 reply to a late duplicate), the vehicle may or may not have applied it. A failure with
-`outcome_unknown=False` guarantees the vehicle's plan is unchanged (on an atomic vehicle).
+`outcome_unknown=False` guarantees the vehicle's plan is unchanged (on an atomic vehicle;
+against a vehicle known not to be atomic, every failed upload that may have written
+something says `outcome_unknown`).
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ class OperationResult:
     detail: str = ""
     started: float = 0.0
     finished: float = 0.0
+    adaptations: tuple[str, ...] = ()               # ids of the adaptations that acted (adaptations.py)
 
     @property
     def ok(self) -> bool:

@@ -15,6 +15,9 @@ drives, the vehicle answers requests and drops the transfer after a long silence
 belongs to one GCS (its partner) while busy; any other GCS touching it gets DENIED.
 An upload collects items aside and commits them whole after the last one, so a failed or
 cancelled upload leaves the stored plan exactly as it was.
+
+Every departure from that (PX4-like and ArduPilot-like profiles) is a `ServerBehaviour`
+knob read here; moves only a knob makes are in `PROFILE_TRANSITIONS`.
 """
 
 from __future__ import annotations
@@ -31,8 +34,8 @@ from .behaviour import ServerBehaviour
 from .constants import Cmd, CommandResult, MissionResult, Severity
 from .items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
 from .progress import MissionProgress
-from .store import MissionStore
-from .transitions import SERVER_TRANSITIONS, SlotEvent, SlotState
+from .store import STORAGE_FORMS, MissionStore
+from .transitions import ALL_SERVER_TRANSITIONS, SlotEvent, SlotState
 from .validation import first_defect
 
 
@@ -47,6 +50,13 @@ class _Transfer:
     expected: int = 0
     received: list[MissionItem] = field(default_factory=list)
     retries: int = 0
+    start: int = 0                 # first seq written (MISSION_WRITE_PARTIAL_LIST), else 0
+    partial: bool = False
+    last_heard: float = 0.0        # last message from the partner (protocol timeout)
+    as_int: bool = True            # form of the vehicle's requests
+    warned: frozenset[str] = frozenset()   # legacy-message warnings sent in this transfer
+    # SENDING
+    next_seq: int = 0              # sequential downloads: the seq the GCS should ask for next
 
 
 @dataclass
@@ -70,6 +80,10 @@ class ServerStats:
     history: list[tuple[MissionType, SlotState, SlotEvent, SlotState]] = field(default_factory=list)
 
 
+# Where the vehicle is when no one has said otherwise (home_at_seq0 serves it as item 0).
+DEFAULT_HOME = MissionItem(0, 0, Cmd.NAV_WAYPOINT, x=473977420, y=85455940, z=0.0)
+
+
 class MissionServer:
     """Vehicle-side mission engine: `handle` frames, `poll` timers, send what it returns."""
 
@@ -77,9 +91,14 @@ class MissionServer:
                  store: MissionStore | None = None, *, record_history: bool = False) -> None:
         self.system = system
         self.component = component
-        self.behaviour = behaviour or ServerBehaviour()
+        self.behaviour = b = behaviour or ServerBehaviour()
         self.store = store or MissionStore()
-        self.progress = MissionProgress(self.store, self.behaviour.current_period)
+        self.progress = MissionProgress(self.store, b.current_period, home_at_seq0=b.home_at_seq0,
+                                        report_ids=b.opaque_id_fields,
+                                        reached_repeats=b.item_reached_repeats)
+        self.home = DEFAULT_HOME     # the vehicle sets its own (home_at_seq0 serves it)
+        self._keep = STORAGE_FORMS[b.item_storage]
+        self._frame_version = 2
         self.stats = ServerStats()
         self._record = record_history
         self._slots = {t: _Transfer(t) for t in PLAN_TYPES}
@@ -96,6 +115,8 @@ class MissionServer:
             "MISSION_CLEAR_ALL": self._on_clear_all,
             "MISSION_SET_CURRENT": self._on_set_current,
         }
+        if b.partial_write:
+            self._handlers["MISSION_WRITE_PARTIAL_LIST"] = self._on_write_partial
 
     # --- public surface -------------------------------------------------------------------
     def state(self, mission_type: MissionType) -> SlotState:
@@ -116,6 +137,7 @@ class MissionServer:
         handler = self._handlers.get(msg._type)
         if handler is None or not self._addressed_to_us(msg):
             return []
+        self._frame_version = frame.version
         return handler(msg, (frame.src_system, frame.src_component), now)
 
     def poll(self, now: float) -> list[Send]:
@@ -172,9 +194,36 @@ class MissionServer:
             # Seed 000: an empty upload "has the same effect as clearing the mission".
             self._move(slot, SlotEvent.COUNT_ZERO)
             return self._commit(t, [], src, now)
-        slot.partner, slot.count, slot.expected, slot.received, slot.retries = src, count, 0, [], 0
+        if not self.behaviour.atomic_upload:
+            self._write(t, list(self.store.items(t)[:count]))   # truncated at once (A2)
+        self._open_upload(slot, src, count, 0, now, partial=False)
         self._move(slot, SlotEvent.COUNT)
         return self._request(slot, now)
+
+    def _on_write_partial(self, msg: Any, src: Peer, now: float) -> list[Send]:
+        """MISSION_WRITE_PARTIAL_LIST: rewrite items start..end (inclusive) of the stored
+        plan; end may be one past it (an append). Anything else: STATUSTEXT + ERROR."""
+        slot, refusal = self._slot_for(msg, src, read=True)
+        if refusal is not None:
+            return refusal
+        t = slot.mission_type
+        if slot.state is not SlotState.IDLE:
+            self._leave(slot)
+        stored = self.store.count(t)
+        start, end = msg.start_index, msg.end_index
+        if not 0 <= start <= end <= stored or end >= self.behaviour.capacity.get(t, 0):
+            return [Send(m.statustext_message(Severity.WARNING, "Flight plan update rejected")),
+                    Send(m.ack_message(MissionResult.ERROR, t, src), src)]
+        self._last_accepted.pop(t, None)
+        self._open_upload(slot, src, end - start + 1, start, now, partial=True)
+        self._move(slot, SlotEvent.PARTIAL_WRITE)
+        return self._request(slot, now)
+
+    def _open_upload(self, slot: _Transfer, src: Peer, count: int, start: int, now: float, *,
+                     partial: bool) -> None:
+        slot.partner, slot.count, slot.expected, slot.received, slot.retries = src, count, start, [], 0
+        slot.start, slot.partial, slot.last_heard = start, partial, now
+        slot.as_int, slot.warned = self.behaviour.request_int, frozenset()
 
     def _on_item(self, msg: Any, src: Peer, now: float) -> list[Send]:
         slot, refusal = self._slot_for(msg, src)
@@ -185,61 +234,87 @@ class MissionServer:
             return self._stray_item(msg, t, src, now)
         if slot.state is not SlotState.RECEIVING:
             return []  # an item from our own download partner means nothing; ignore it
+        b = self.behaviour
+        slot.last_heard = now
+        is_int = msg._type == m.ITEM_INT
+        out = [] if is_int else self._warn_legacy(slot, "item", "got MISSION_ITEM; GCS should send MISSION_ITEM_INT")
+        if b.follow_gcs_int_mode:
+            slot.as_int = is_int
         if msg.seq != slot.expected:
-            return self._out_of_sequence(slot, msg.seq, now)
+            return out + self._out_of_sequence(slot, msg.seq, now)
         item = m.item_from_message(msg)
         if item is None:
             code = (MissionResult.INVALID_PARAM5_X if m.float_xy_defect(msg) == 5
                     else MissionResult.INVALID_PARAM6_Y)
-            return self._reject(slot, code, src)
-        defect = first_defect(item, self.behaviour.item_rules)
+            return out + self._reject(slot, code, src)
+        defect = first_defect(item, b.item_rules)
         if defect is not None:
-            return self._reject(slot, defect.code, src)
+            return out + self._reject(slot, defect.code, src)
+        item = self._keep(item)
         slot.received.append(item)
+        if not b.atomic_upload:   # written as it arrives (A2)
+            self._write(t, self._spliced(t, item.seq, [item]))
         if len(slot.received) < slot.count:
             slot.expected += 1
             self._move(slot, SlotEvent.ITEM_NEXT)
-            return self._request(slot, now)
+            return out + self._request(slot, now)
         items = slot.received
+        if slot.partial:
+            items = self._spliced(t, slot.start, items)
         self._move(slot, SlotEvent.ITEM_LAST)
         self._leave(slot)
-        return self._commit(t, items, src, now)
+        return out + self._commit(t, items, src, now)
 
     def _on_request_list(self, msg: Any, src: Peer, now: float) -> list[Send]:
-        slot, refusal = self._slot_for(msg, src)
+        slot, refusal = self._slot_for(msg, src, read=True)
         if refusal is not None:
             return refusal
         t = slot.mission_type
         if slot.state is not SlotState.IDLE:
             self._leave(slot)
         count = self.store.count(t)
-        reply = Send(m.count_message(count, t, src, self.store.opaque_id(t)), src)
+        reply = Send(m.count_message(count, t, src, self._opaque_id(t)), src)
+        slot.warned = frozenset()
         if count == 0:
             self._move(slot, SlotEvent.REQUEST_LIST_EMPTY)
             return [reply]
-        slot.partner = src
+        if not self.behaviour.stateful_download:
+            self._move(slot, SlotEvent.REQUEST_LIST_UNTRACKED)
+            return [reply]
+        slot.partner, slot.next_seq = src, 0
         slot.deadline = now + self.behaviour.download_idle_timeout
         self._move(slot, SlotEvent.REQUEST_LIST)
         return [reply]
 
     def _on_request(self, msg: Any, src: Peer, now: float) -> list[Send]:
-        slot, refusal = self._slot_for(msg, src)
+        slot, refusal = self._slot_for(msg, src, read=True)
         if refusal is not None:
             return refusal
         t = slot.mission_type
+        b = self.behaviour
+        as_int = msg.get_type() == m.REQUEST_INT
+        out = [] if as_int else self._warn_legacy(slot, "request", "got MISSION_REQUEST; use MISSION_REQUEST_INT!")
         if slot.state is SlotState.IDLE:
-            return self._stray(t, src)
+            if b.stateful_download:
+                return self._stray(t, src)
+            # no download state (A14): any request is answered from the stored plan
+            self._move(slot, SlotEvent.REQUEST_UNTRACKED)
+            if msg.seq >= self.store.count(t):
+                return out + [Send(m.ack_message(MissionResult.INVALID_SEQUENCE, t, src), src)]
+            return out + [Send(m.item_message(self._download_item(t, msg.seq), src, as_int=as_int), src)]
         if slot.state is not SlotState.SENDING:
             return []  # our own upload partner asking for items: meaningless, ignore
-        items = self.store.items(t)
-        if msg.seq >= len(items):
+        seq = msg.seq
+        if seq >= self.store.count(t) or (b.sequential_download and seq not in (slot.next_seq, slot.next_seq - 1)):
+            code = MissionResult.ERROR if b.sequential_download else MissionResult.INVALID_SEQUENCE
             self._move(slot, SlotEvent.REQUEST_INVALID)
             self._leave(slot)
-            return [Send(m.ack_message(MissionResult.INVALID_SEQUENCE, t, src), src)]
-        slot.deadline = now + self.behaviour.download_idle_timeout
+            return out + [Send(m.ack_message(code, t, src), src)]
+        if seq == slot.next_seq:
+            slot.next_seq += 1
+        slot.deadline = now + b.download_idle_timeout
         self._move(slot, SlotEvent.REQUEST_VALID)
-        as_int = msg.get_type() == m.REQUEST_INT
-        return [Send(m.item_message(items[msg.seq], src, as_int=as_int), src)]
+        return out + [Send(m.item_message(self._download_item(t, seq), src, as_int=as_int), src)]
 
     def _on_ack(self, msg: Any, src: Peer, now: float) -> list[Send]:
         t = self._plan_type(msg.mission_type)
@@ -252,7 +327,12 @@ class MissionServer:
             self._move(slot, SlotEvent.ACK)  # the GCS ends its download, whatever the code
             self.stats.downloads_served += 1
             self._leave(slot)
-        elif msg.type != MissionResult.ACCEPTED:
+        elif self.behaviour.follow_gcs_int_mode and msg.type == MissionResult.UNSUPPORTED:
+            # The GCS cannot take this request form: flip int/float and ask again (P8).
+            slot.as_int = not slot.as_int
+            self._move(slot, SlotEvent.FORM_FLIPPED)
+            return [Send(self._request_msg(slot), slot.partner)]
+        elif msg.type != MissionResult.ACCEPTED and self.behaviour.honour_cancel_upload:
             # Seed 000: an error ACK "must cancel the operation and restore the mission".
             self._move(slot, SlotEvent.ACK)
             self.stats.uploads_failed += 1
@@ -261,8 +341,11 @@ class MissionServer:
 
     def _on_clear_all(self, msg: Any, src: Peer, now: float) -> list[Send]:
         raw = msg.mission_type
+        b = self.behaviour
         if raw == MissionType.ALL:
-            types: tuple[MissionType, ...] = PLAN_TYPES
+            if not b.clear_all_supported:
+                return self._unsupported(raw, src)
+            types: tuple[MissionType, ...] = tuple(t for t in PLAN_TYPES if t in b.supported_types)
         else:
             t = self._plan_type(raw)
             if t is None:
@@ -272,6 +355,11 @@ class MissionServer:
         if any(self._busy_with_other(self._slots[t], src) for t in types):
             self.stats.denied += 1
             return [Send(m.ack_message(MissionResult.DENIED, reply_type, src), src)]
+        if MissionType.MISSION in types and self.progress.running and not b.clear_while_flying:
+            return [Send(m.ack_message(MissionResult.ERROR, reply_type, src), src)]   # A12
+        refused = self._v1_refusal(types[0] if len(types) == 1 else MissionType.MISSION, src)
+        if refused is not None:
+            return refused
         out: list[Send] = []
         for t in types:
             slot = self._slots[t]
@@ -285,6 +373,8 @@ class MissionServer:
         return [Send(m.ack_message(MissionResult.ACCEPTED, reply_type, src), src)] + out
 
     def _on_set_current(self, msg: Any, src: Peer, now: float) -> list[Send]:
+        if self.behaviour.set_current_only_idle and not self.is_idle():
+            return [Send(m.statustext_message(Severity.WARNING, "Set current refused: a transfer is in progress"))]
         count = self.store.count(MissionType.MISSION)
         if not 0 <= msg.seq < count:
             return self._set_current_failed(msg.seq, count)
@@ -296,7 +386,10 @@ class MissionServer:
             self._move(slot, SlotEvent.TIMEOUT_GIVE_UP)  # the GCS went quiet; it drives retries
             self._leave(slot)
             return []
-        if slot.retries < self.behaviour.timings.max_retries:
+        b = self.behaviour
+        protocol = b.timings.protocol_timeout
+        expired = protocol is not None and now >= slot.last_heard + protocol
+        if not expired and (not b.retry_cap or slot.retries < b.timings.max_retries):
             slot.retries += 1
             self.stats.retries += 1
             self.stats.max_consecutive_retries = max(self.stats.max_consecutive_retries, slot.retries)
@@ -306,9 +399,12 @@ class MissionServer:
         self._move(slot, SlotEvent.TIMEOUT_GIVE_UP)
         self.stats.uploads_failed += 1
         self._leave(slot)
-        if not self.behaviour.notify_upload_give_up:
-            return []
-        return [Send(m.ack_message(MissionResult.OPERATION_CANCELLED, t, partner), partner)]
+        out = []
+        if b.notify_upload_give_up:
+            out.append(Send(m.ack_message(MissionResult.OPERATION_CANCELLED, t, partner), partner))
+        if b.give_up_statustext:
+            out.append(Send(m.statustext_message(Severity.WARNING, b.give_up_statustext)))
+        return out
 
     def _out_of_sequence(self, slot: _Transfer, seq: int, now: float) -> list[Send]:
         """Seed 000: an out-of-sequence item is dropped and the expected one re-requested.
@@ -321,24 +417,57 @@ class MissionServer:
         the retry count: only progress does, so a peer that keeps sending the wrong item
         cannot hold the transfer open."""
         self._move(slot, SlotEvent.ITEM_OUT_OF_SEQUENCE)
-        if seq < slot.expected:
-            return []
+        b = self.behaviour
+        out = []
+        if b.out_of_sequence_reply is not None:
+            out.append(Send(m.ack_message(b.out_of_sequence_reply, slot.mission_type, slot.partner), slot.partner))
+        if seq < slot.expected or not b.rerequest_gap:
+            return out
         self.stats.rerequests += 1
-        return [Send(self._request_msg(slot), slot.partner)]
+        return out + [Send(self._request_msg(slot), slot.partner)]
 
     # --- helpers --------------------------------------------------------------------------
     def _request_msg(self, slot: _Transfer) -> Any:
-        return m.request_message(slot.expected, slot.mission_type, slot.partner,
-                                 as_int=self.behaviour.request_int)
+        return m.request_message(slot.expected, slot.mission_type, slot.partner, as_int=slot.as_int)
 
     def _request(self, slot: _Transfer, now: float, *, reset_retries: bool = True) -> list[Send]:
         if reset_retries:
             slot.retries = 0
-        slot.deadline = now + self.behaviour.timings.item_timeout
+        timings = self.behaviour.timings
+        slot.deadline = now + timings.item_timeout
+        if timings.protocol_timeout is not None:
+            slot.deadline = min(slot.deadline, slot.last_heard + timings.protocol_timeout)
         return [Send(self._request_msg(slot), slot.partner)]
 
+    def _write(self, t: MissionType, items: list[MissionItem]) -> None:
+        """Store `items` at once (non-atomic uploads); the final ACK still commits."""
+        self.store.commit(t, items)
+
+    def _spliced(self, t: MissionType, start: int, items: list[MissionItem]) -> list[MissionItem]:
+        """The stored plan with `items` written from seq `start` on."""
+        plan = list(self.store.items(t))
+        return plan[:start] + list(items) + plan[start + len(items):]
+
+    def _download_item(self, t: MissionType, seq: int) -> MissionItem:
+        """Stored item `seq` as a download serves it: item 0 of a mission is the vehicle's
+        home when the plan holds it there (A1)."""
+        if seq == 0 and t is MissionType.MISSION and self.behaviour.home_at_seq0:
+            return self._keep(self.home)
+        return self.store.items(t)[seq]
+
+    def _opaque_id(self, t: MissionType) -> int:
+        return self.store.opaque_id(t) if self.behaviour.opaque_id_fields else 0
+
+    def _warn_legacy(self, slot: _Transfer, kind: str, text: str) -> list[Send]:
+        """A7: one STATUSTEXT per transfer for a GCS that uses the float forms."""
+        if not self.behaviour.legacy_warnings or kind in slot.warned:
+            return []
+        slot.warned = slot.warned | {kind}
+        return [Send(m.statustext_message(Severity.WARNING, text))]
+
     def _commit(self, t: MissionType, items: list[MissionItem], src: Peer, now: float) -> list[Send]:
-        opaque_id = self.store.commit(t, items)
+        self.store.commit(t, items)
+        opaque_id = self._opaque_id(t)
         self.stats.uploads_accepted += 1
         if items and self.behaviour.reack_last_item:
             until = now + self.behaviour.download_idle_timeout
@@ -351,17 +480,30 @@ class MissionServer:
         return out
 
     def _reject(self, slot: _Transfer, code: MissionResult, src: Peer) -> list[Send]:
+        if not self.behaviour.nack_ends_upload:   # A3: the NACK is sent, the upload goes on
+            self._move(slot, SlotEvent.ITEM_REFUSED_GOES_ON)
+            return [Send(m.ack_message(code, slot.mission_type, src), src)]
         self._move(slot, SlotEvent.ITEM_REJECTED)
         self.stats.uploads_failed += 1
         self._leave(slot)
         return [Send(m.ack_message(code, slot.mission_type, src), src)]
 
     def _stray_item(self, msg: Any, t: MissionType, src: Peer, now: float) -> list[Send]:
+        code = self.behaviour.foreign_type_item_reply
+        if code is not None:
+            running = next((s for s in self._slot_list if s.state is SlotState.RECEIVING
+                            and s.partner == src), None)
+            if running is not None:   # P7: an item of another type than the partner's upload
+                running.last_heard = now
+                self._move(self._slots[t], SlotEvent.STRAY)
+                return [Send(m.ack_message(code, running.mission_type, src), src)]
         last = self._last_accepted.get(t)
         if last is not None and last.partner == src and now <= last.until:
             # A late copy of an item of the upload we just accepted: that GCS has not seen
             # our final ACK yet (it was lost, or a delayed duplicate request drew this item).
             item = m.item_from_message(msg)
+            if item is not None:
+                item = self._keep(item)   # compared in the form it was stored in
             if item is not None and item.seq < len(last.items) and item == last.items[item.seq]:
                 return [Send(m.ack_message(MissionResult.ACCEPTED, t, src, last.opaque_id), src)]
         return self._stray(t, src)
@@ -372,16 +514,28 @@ class MissionServer:
         code = self.behaviour.idle_reply
         return [] if code is None else [Send(m.ack_message(code, t, src), src)]
 
-    def _slot_for(self, msg: Any, src: Peer) -> tuple[_Transfer, list[Send] | None]:
+    def _slot_for(self, msg: Any, src: Peer, *, read: bool = False) -> tuple[_Transfer, list[Send] | None]:
         """The transfer slot a message is about, or the refusal to send instead: UNSUPPORTED
-        for a plan type we do not store, DENIED while another GCS's transfer holds it."""
+        for a plan type we do not store (or, for some, over MAVLink 1), DENIED while another
+        GCS's transfer holds it (or, with `deny_reads_during_upload`, a read while it uploads)."""
         t = self._plan_type(msg.mission_type)
         if t is None:
             return None, self._unsupported(msg.mission_type, src)  # type: ignore[return-value]
+        refused = self._v1_refusal(t, src)
+        if refused is not None:
+            return None, refused  # type: ignore[return-value]
         slot = self._slots[t]
-        if self._busy_with_other(slot, src):
+        if self._busy_with_other(slot, src) or (
+                read and slot.state is SlotState.RECEIVING and self.behaviour.deny_reads_during_upload):
             return slot, self._deny(t, src)
         return slot, None
+
+    def _v1_refusal(self, t: MissionType, src: Peer) -> list[Send] | None:
+        """A11: transfers of some plan types need MAVLink 2."""
+        if self._frame_version != 1 or t not in self.behaviour.mavlink2_types:
+            return None
+        return [Send(m.statustext_message(Severity.WARNING, "Need mavlink2 for item transfer")),
+                Send(m.ack_message(MissionResult.UNSUPPORTED, t, src), src)]
 
     def _deny(self, t: MissionType, src: Peer) -> list[Send]:
         self.stats.denied += 1
@@ -423,7 +577,7 @@ class MissionServer:
     def _move(self, slot: _Transfer, event: SlotEvent) -> None:
         key = (slot.state, event)
         try:
-            new_state = SERVER_TRANSITIONS[key]
+            new_state = ALL_SERVER_TRANSITIONS[key]
         except KeyError:
             raise LocalProtocolError(
                 f"server {slot.mission_type.label}: no transition for {event.name} in {slot.state.name}"

@@ -10,11 +10,14 @@ when there is any change to the on-vehicle plan type").
 
 from __future__ import annotations
 
+import math
 import struct
 import zlib
-from typing import Iterable, Sequence
+from dataclasses import replace
+from typing import Callable, Iterable, Sequence
 
-from .items import PLAN_TYPES, MissionItem, MissionType
+from .constants import Cmd
+from .items import PLAN_TYPES, MissionItem, MissionType, to_float32
 
 _ITEM = struct.Struct("<HBHffffiifBBB")
 
@@ -62,3 +65,46 @@ class MissionStore:
 
     def snapshot(self) -> dict[MissionType, tuple[MissionItem, ...]]:
         return dict(self._plans)
+
+
+# --- storage forms (ServerBehaviour.item_storage) ------------------------------------------
+# *_INT frames a 15-byte command record cannot tell apart from their plain frames.
+_PLAIN_FRAME = {5: 0, 6: 3, 11: 10}
+_INT16 = 32767
+
+
+def _whole(value: float, low: float, high: float) -> float:
+    """Truncated toward zero and clamped, as a float-to-integer store does; NaN -> 0."""
+    if value != value:
+        return 0.0
+    return float(min(high, max(low, math.trunc(value)))) if math.isfinite(value) else (
+        high if value > 0 else low)
+
+
+def _compact15(item: MissionItem) -> MissionItem:
+    """A 15-byte command record (VARIANTS.md A13): what survives a round trip through it.
+
+    Altitude is kept in whole centimetres (rally points: whole metres, int16); a waypoint
+    keeps only its hold time, in whole seconds (0..65535); fence items keep param1 (vertex
+    count or radius); *_INT frames come back as their plain frames. x/y are int32 already.
+    """
+    frame = _PLAIN_FRAME.get(item.frame, item.frame)
+    t = item.mission_type
+    if t is MissionType.RALLY:
+        return replace(item, frame=frame, param1=0.0, param2=0.0, param3=0.0, param4=0.0,
+                       z=_whole(item.z, -_INT16 - 1, _INT16))
+    if t is MissionType.FENCE:
+        return replace(item, frame=frame, param2=0.0, param3=0.0, param4=0.0, z=0.0)
+    z = item.z
+    if math.isfinite(z):
+        z = to_float32(math.trunc(to_float32(z) * 100) / 100)
+    if item.command == Cmd.NAV_WAYPOINT:
+        return replace(item, frame=frame, param1=_whole(item.param1, 0, 65535),
+                       param2=0.0, param3=0.0, param4=0.0, z=z)
+    return replace(item, frame=frame, z=z)
+
+
+STORAGE_FORMS: dict[str, Callable[[MissionItem], MissionItem]] = {
+    "exact": lambda item: item,
+    "compact15": _compact15,
+}

@@ -36,6 +36,12 @@ class SlotEvent(Enum):
     TIMEOUT_GIVE_UP = "timeout: retries exhausted"
     CANCEL = "cancelled by the vehicle"
     SUPERSEDED = "partner started another operation"
+    # reached only with a profile's knobs (PROFILE_TRANSITIONS)
+    PARTIAL_WRITE = "MISSION_WRITE_PARTIAL_LIST accepted"
+    ITEM_REFUSED_GOES_ON = "item refused with an error ACK, the upload goes on"
+    FORM_FLIPPED = "MISSION_ACK UNSUPPORTED: request form flipped (int/float)"
+    REQUEST_LIST_UNTRACKED = "MISSION_REQUEST_LIST answered, no download state kept"
+    REQUEST_UNTRACKED = "request answered outside any download"
 
 
 _S, _E = SlotState, SlotEvent
@@ -64,6 +70,17 @@ SERVER_TRANSITIONS: dict[tuple[SlotState, SlotEvent], SlotState] = {
     (_S.SENDING, _E.SUPERSEDED): _S.IDLE,
 }
 
+# Moves only a profile's knobs make (non-spec behaviour: VARIANTS.md A3, A9, A14, P8). Kept
+# apart so the spec table stays exactly what the spec vehicle walks.
+PROFILE_TRANSITIONS: dict[tuple[SlotState, SlotEvent], SlotState] = {
+    (_S.IDLE, _E.PARTIAL_WRITE): _S.RECEIVING,
+    (_S.RECEIVING, _E.ITEM_REFUSED_GOES_ON): _S.RECEIVING,
+    (_S.RECEIVING, _E.FORM_FLIPPED): _S.RECEIVING,
+    (_S.IDLE, _E.REQUEST_LIST_UNTRACKED): _S.IDLE,
+    (_S.IDLE, _E.REQUEST_UNTRACKED): _S.IDLE,
+}
+ALL_SERVER_TRANSITIONS = {**SERVER_TRANSITIONS, **PROFILE_TRANSITIONS}
+
 
 class ClientState(Enum):
     """The GCS-side engine (one operation at a time)."""
@@ -86,6 +103,8 @@ class ClientEvent(Enum):
     COUNT = "vehicle sent MISSION_COUNT"
     ITEM = "expected item received"
     ITEM_OUT_OF_SEQUENCE = "item out of sequence: dropped (a gap is re-requested)"
+    CLEAR_NEXT = "plan type cleared: MISSION_CLEAR_ALL for the next type sent"
+    RESTART = "download ended by a vehicle error: MISSION_REQUEST_LIST sent again"
     TIMEOUT_RETRY = "timeout: resend"
     FINISH = "operation finished (success, NACK, timeout, cancel or protocol error)"
 
@@ -109,7 +128,10 @@ CLIENT_TRANSITIONS: dict[tuple[ClientState, ClientEvent], ClientState] = {
     (_C.DOWNLOAD_REQUESTING, _V.ITEM_OUT_OF_SEQUENCE): _C.DOWNLOAD_REQUESTING,
     (_C.DOWNLOAD_REQUESTING, _V.TIMEOUT_RETRY): _C.DOWNLOAD_REQUESTING,
     (_C.DOWNLOAD_REQUESTING, _V.FINISH): _C.IDLE,
+    (_C.DOWNLOAD_REQUESTING, _V.RESTART): _C.DOWNLOAD_LIST_SENT,
+    (_C.DOWNLOAD_LIST_SENT, _V.RESTART): _C.DOWNLOAD_LIST_SENT,
     (_C.CLEAR_SENT, _V.TIMEOUT_RETRY): _C.CLEAR_SENT,
+    (_C.CLEAR_SENT, _V.CLEAR_NEXT): _C.CLEAR_SENT,
     (_C.CLEAR_SENT, _V.FINISH): _C.IDLE,
     (_C.SET_CURRENT_SENT, _V.TIMEOUT_RETRY): _C.SET_CURRENT_SENT,
     (_C.SET_CURRENT_SENT, _V.FINISH): _C.IDLE,

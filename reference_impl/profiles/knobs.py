@@ -1,0 +1,163 @@
+"""Every knob a profile file may set: its name, where it lands, how its value is read.
+
+A knob lands in `ServerBehaviour` (the mission engine), in its `Timings`, or in
+`VehicleConfig` (the node around it). Values come from TOML; each parser turns one into the
+engine's type or raises `ValueError` with what was expected, which the loader turns into a
+one-line `UsageError` naming the file and the key.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from ..mission.constants import MissionResult
+from ..mission.items import PLAN_TYPES, MissionType
+from ..mission.store import STORAGE_FORMS
+from ..mission.validation import SPEC_RULES
+
+BEHAVIOUR, TIMINGS, CONFIG = "behaviour", "timings", "config"
+_TYPE_BY_NAME = {t.label: t for t in PLAN_TYPES}
+
+
+@dataclass(frozen=True)
+class Knob:
+    name: str
+    where: str                       # BEHAVIOUR | TIMINGS | CONFIG
+    field: str                       # the dataclass field it sets
+    parse: Callable[[Any], Any]      # TOML value -> engine value (ValueError if bad)
+    doc: str
+
+
+def _bool(v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise ValueError(f"expected true or false, got {v!r}")
+    return v
+
+
+def _seconds(v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+        raise ValueError(f"expected a number of seconds > 0, got {v!r}")
+    return float(v)
+
+
+def _seconds_or_none(v: Any) -> float | None:
+    return None if v == "none" else _seconds(v)
+
+
+def _count(low: int, high: int) -> Callable[[Any], int]:
+    def parse(v: Any) -> int:
+        if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+            raise ValueError(f"expected a whole number in {low}..{high}, got {v!r}")
+        return v
+    return parse
+
+
+def _result(v: Any) -> MissionResult:
+    try:
+        return MissionResult[str(v).upper()]
+    except KeyError:
+        raise ValueError(f"expected a MAV_MISSION_RESULT name (e.g. ERROR, DENIED), got {v!r}") from None
+
+
+def _result_or_none(v: Any) -> MissionResult | None:
+    return None if v == "none" else _result(v)
+
+
+def _types(v: Any) -> frozenset[MissionType]:
+    if not isinstance(v, list) or not all(isinstance(x, str) and x in _TYPE_BY_NAME for x in v):
+        raise ValueError(f"expected a list of plan types from {sorted(_TYPE_BY_NAME)}, got {v!r}")
+    return frozenset(_TYPE_BY_NAME[x] for x in v)
+
+
+def _capacity(v: Any) -> dict[MissionType, int]:
+    if not isinstance(v, dict) or set(v) != set(_TYPE_BY_NAME):
+        raise ValueError(f"expected a table with keys {sorted(_TYPE_BY_NAME)}, got {v!r}")
+    parse = _count(0, 0xFFFF)
+    return {_TYPE_BY_NAME[k]: parse(n) for k, n in v.items()}
+
+
+def _storage(v: Any) -> str:
+    if v not in STORAGE_FORMS:
+        raise ValueError(f"expected one of {sorted(STORAGE_FORMS)}, got {v!r}")
+    return v
+
+
+def _text(v: Any) -> str:
+    if not isinstance(v, str) or len(v.encode()) > 50:
+        raise ValueError(f"expected a string of at most 50 bytes (a STATUSTEXT), got {v!r}")
+    return v
+
+
+_COMMAND_RULE = "command known for its mission type"
+
+
+def _unknown_commands(v: Any) -> tuple:
+    """accept_unknown_commands = true: mission items with any command are accepted (fence
+    and rally items must still carry their own commands)."""
+    if not _bool(v):
+        return SPEC_RULES
+    from ..mission.validation import ItemRule
+    rules = []
+    for rule in SPEC_RULES:
+        if rule.name == _COMMAND_RULE:
+            rule = ItemRule("fence and rally commands known", rule.code,
+                            lambda it: it.mission_type is not MissionType.MISSION, rule.holds)
+        rules.append(rule)
+    return tuple(rules)
+
+
+_KNOBS = (
+    # timings
+    Knob("default_timeout", TIMINGS, "default_timeout", _seconds, "s: response timeout (spec 1.5)"),
+    Knob("item_timeout", TIMINGS, "item_timeout", _seconds, "s: the vehicle re-requests a missing item after this (spec 0.25)"),
+    Knob("max_retries", TIMINGS, "max_retries", _count(0, 1000), "resends of one request before giving up (spec 5)"),
+    Knob("protocol_timeout", TIMINGS, "protocol_timeout", _seconds_or_none,
+         "s without any message from the partner after which an upload is given up; \"none\": after max_retries"),
+    # behaviour
+    Knob("retry_cap", BEHAVIOUR, "retry_cap", _bool, "resends are capped at max_retries (false: until protocol_timeout)"),
+    Knob("capacity", BEHAVIOUR, "capacity", _capacity, "most items per plan type; more gets NO_SPACE"),
+    Knob("supported_types", BEHAVIOUR, "supported_types", _types, "plan types stored; others get UNSUPPORTED"),
+    Knob("request_int", BEHAVIOUR, "request_int", _bool, "request items with MISSION_REQUEST_INT (false: MISSION_REQUEST)"),
+    Knob("accept_unknown_commands", BEHAVIOUR, "item_rules", _unknown_commands,
+         "mission items with commands the vehicle does not know are accepted (skipped when flown)"),
+    Knob("idle_reply", BEHAVIOUR, "idle_reply", _result_or_none, "MISSION_ACK for a stray item/request in idle (\"none\": silence)"),
+    Knob("reack_last_item", BEHAVIOUR, "reack_last_item", _bool, "a late copy of the last item draws ACCEPTED again"),
+    Knob("notify_upload_give_up", BEHAVIOUR, "notify_upload_give_up", _bool,
+         "a given-up upload is ended with MISSION_ACK OPERATION_CANCELLED"),
+    Knob("give_up_statustext", BEHAVIOUR, "give_up_statustext", _text, "STATUSTEXT sent when an upload is given up (\"\": none)"),
+    Knob("current_period", BEHAVIOUR, "current_period", _seconds, "s between streamed MISSION_CURRENTs"),
+    Knob("atomic_upload", BEHAVIOUR, "atomic_upload", _bool, "an upload replaces the plan whole after its last item"),
+    Knob("nack_ends_upload", BEHAVIOUR, "nack_ends_upload", _bool, "a refused item ends the upload"),
+    Knob("out_of_sequence_reply", BEHAVIOUR, "out_of_sequence_reply", _result_or_none,
+         "MISSION_ACK for an out-of-sequence item (\"none\": dropped silently)"),
+    Knob("rerequest_gap", BEHAVIOUR, "rerequest_gap", _bool, "an item past the expected one draws an immediate re-request"),
+    Knob("honour_cancel_upload", BEHAVIOUR, "honour_cancel_upload", _bool, "an error MISSION_ACK from the GCS ends its upload"),
+    Knob("foreign_type_item_reply", BEHAVIOUR, "foreign_type_item_reply", _result_or_none,
+         "MISSION_ACK for an item of another plan type during an upload (\"none\": a stray)"),
+    Knob("follow_gcs_int_mode", BEHAVIOUR, "follow_gcs_int_mode", _bool,
+         "requests follow the GCS's item form; MISSION_ACK UNSUPPORTED flips int/float"),
+    Knob("partial_write", BEHAVIOUR, "partial_write", _bool, "MISSION_WRITE_PARTIAL_LIST is supported"),
+    Knob("stateful_download", BEHAVIOUR, "stateful_download", _bool,
+         "a download is a transfer the GCS's ACK ends (false: requests answered any time, ACK ignored)"),
+    Knob("sequential_download", BEHAVIOUR, "sequential_download", _bool,
+         "requests must come in order (seq-1 resends; other seqs end the download with ERROR)"),
+    Knob("deny_reads_during_upload", BEHAVIOUR, "deny_reads_during_upload", _bool,
+         "reads (REQUEST_LIST, REQUEST, WRITE_PARTIAL_LIST) get DENIED while the type uploads"),
+    Knob("home_at_seq0", BEHAVIOUR, "home_at_seq0", _bool, "mission item 0 is the vehicle's home"),
+    Knob("item_storage", BEHAVIOUR, "item_storage", _storage, "how items are kept: exact or compact15"),
+    Knob("opaque_id_fields", BEHAVIOUR, "opaque_id_fields", _bool, "plan ids are reported (false: the older dialect)"),
+    Knob("clear_all_supported", BEHAVIOUR, "clear_all_supported", _bool, "MISSION_CLEAR_ALL with MAV_MISSION_TYPE_ALL works"),
+    Knob("clear_while_flying", BEHAVIOUR, "clear_while_flying", _bool, "the mission may be cleared while flown"),
+    Knob("set_current_only_idle", BEHAVIOUR, "set_current_only_idle", _bool, "MISSION_SET_CURRENT is refused during a transfer"),
+    Knob("item_reached_repeats", BEHAVIOUR, "item_reached_repeats", _count(1, 100),
+         "MISSION_ITEM_REACHED is sent this many times, 1 s apart"),
+    Knob("mavlink2_types", BEHAVIOUR, "mavlink2_types", _types, "plan types whose transfers need MAVLink 2"),
+    Knob("legacy_warnings", BEHAVIOUR, "legacy_warnings", _bool, "STATUSTEXT warning for MISSION_REQUEST / MISSION_ITEM"),
+    # vehicle
+    Knob("autopilot", CONFIG, "autopilot", _count(0, 255), "HEARTBEAT.autopilot (MAV_AUTOPILOT)"),
+)
+
+KNOBS: dict[str, Knob] = {k.name: k for k in _KNOBS}
+assert len(KNOBS) == len(_KNOBS), "duplicate knob name"

@@ -1,0 +1,81 @@
+"""Profiles, clauses and expectations cannot drift apart: a run of every clause against
+builtin:px4 and builtin:ardupilot (virtual time) fails exactly the clauses its bundled
+expectations file lists, errs on none, and every listed variant is one the profile covers."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from conformance import expectations
+from conformance.catalogue import CLAUSES
+from conformance.outcome import Outcome
+from conformance.runner import run_clauses
+from conformance.session import Session
+from conformance.target_uri import parse_target
+from reference_impl.profiles import BUILTIN_PROFILES, load_profile
+
+AUTOPILOTS = ("px4", "ardupilot")
+# Rows of VARIANTS.md each profile must account for (by a knob or a documented reason).
+ROWS = {
+    "px4": {f"P{i}" for i in range(1, 15)} | {"P1'", "P2'"},
+    "ardupilot": {f"A{i}" for i in range(1, 20)},
+}
+VARIANT_ID = re.compile(r"^(HB|[AP]\d+'?)$")
+
+
+def _run(name: str) -> dict:
+    with Session(parse_target(f"builtin:{name}"), virtual=True) as session:
+        return {r.clause_id: r for r in run_clauses(session, CLAUSES).results}
+
+
+@pytest.fixture(scope="module", params=AUTOPILOTS)
+def profile_run(request):
+    return request.param, _run(request.param)
+
+
+def test_the_profile_fails_exactly_the_clauses_its_expectations_list(profile_run) -> None:
+    name, results = profile_run
+    failed = {k for k, r in results.items() if r.outcome is Outcome.FAIL}
+    listed = set(expectations.load(name))
+    detail = {k: results[k].detail for k in failed ^ listed}
+    assert failed == listed, (f"{name}: failing but not listed: {sorted(failed - listed)}; listed but "
+                              f"passing: {sorted(listed - failed)}; {detail}")
+
+
+def test_the_profile_leaves_no_clause_undecided(profile_run) -> None:
+    name, results = profile_run
+    errors = {k: r.detail for k, r in results.items() if r.outcome is Outcome.ERROR}
+    assert not errors, errors
+
+
+@pytest.mark.parametrize("name", AUTOPILOTS)
+def test_every_listed_variant_is_one_the_profile_reproduces(name: str) -> None:
+    covered = load_profile(name).variants()
+    for clause, dev in expectations.load(name).items():
+        assert dev.variant in covered, f"{name}: {clause} cites {dev.variant!r}, not a row of the {name} profile"
+
+
+@pytest.mark.parametrize("name", AUTOPILOTS)
+def test_the_profile_accounts_for_every_row_of_its_autopilot(name: str) -> None:
+    profile = load_profile(name)
+    assert ROWS[name] <= profile.variants(), sorted(ROWS[name] - profile.variants())
+    for s in profile.settings:
+        assert VARIANT_ID.match(s.variant) and s.source and s.why, s
+    for d in profile.documented:
+        assert VARIANT_ID.match(d.variant) and d.why, d
+
+
+def test_spec_profile_is_the_default_vehicle() -> None:
+    from reference_impl.mission.behaviour import ServerBehaviour
+    from reference_impl.vehicle import VehicleConfig
+    spec = load_profile("spec")
+    assert spec.behaviour == ServerBehaviour() and spec.config == VehicleConfig() and not spec.settings
+    assert set(BUILTIN_PROFILES) == {"spec", *AUTOPILOTS}
+
+
+def test_the_builtin_vehicle_says_who_it_is() -> None:
+    for name, autopilot in (("spec", 4), ("px4", 12), ("ardupilot", 3)):
+        with Session(parse_target(f"builtin:{name}"), virtual=True) as session:
+            assert session.discover()["autopilot"] == autopilot
