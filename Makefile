@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test run demo bench clean
+.PHONY: setup test run demo fuzz fault-table bench clean
 
 setup: $(VENV)/.installed
 
@@ -22,9 +22,18 @@ run: setup           ## the main job: the conformance suite vs builtin:spec over
 demo: setup          ## reference GCS <-> reference vehicle over lossy UDP loopback
 	$(BIN)/mavconform demo
 
+fuzz: setup          ## short bounded campaigns of both fuzz modes vs builtin:spec -> reports/fuzz/
+	$(BIN)/mavconform fuzz --target builtin:spec --mode protocol --examples 1000 --seed 1 --report-dir reports/fuzz/protocol
+	$(BIN)/mavconform fuzz --target builtin:spec --mode frames --examples 1000 --seed 1 --report-dir reports/fuzz/frames
+
+fault-table: setup   ## regenerate docs/fault-tolerance.md (the reference GCS vs QGC MockLink failure modes)
+	$(BIN)/mavconform fault-table --output docs/fault-tolerance.md
+
 bench: setup         ## figures, not pass/fail
 	$(BIN)/python bench/transfer_vs_codec.py
 	$(BIN)/python bench/conformance_wall.py
+	$(BIN)/python bench/protocol_fuzz.py
+	$(BIN)/python bench/frame_fuzz.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis reports/out
+	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz fuzz-findings

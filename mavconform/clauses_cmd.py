@@ -29,13 +29,16 @@ def run(args: argparse.Namespace) -> int:
     if args.mutants:
         from conformance.mutants import MUTANTS
         wanted = {c.id for c in chosen}
-        rows = [mu for mu in MUTANTS.values() if mu.breaks & wanted]
+        # with no clause filter, also the mutants no clause catches (planted for the fuzzers)
+        everything = args.clauses in (None, "*") and not args.level
+        rows = [mu for mu in MUTANTS.values() if mu.breaks & wanted or (everything and not mu.breaks)]
         if args.json:
             print(json.dumps([{"name": mu.name, "description": mu.description,
                                "breaks": sorted(mu.breaks)} for mu in rows], indent=2))
             return 0
         for mu in rows:
-            print(f"mutant:{mu.name:<28} {mu.description}\n{'':<36} breaks {', '.join(sorted(mu.breaks))}")
+            broken = ", ".join(sorted(mu.breaks)) or "no clause (a bug for the fuzzers to find)"
+            print(f"mutant:{mu.name:<28} {mu.description}\n{'':<36} breaks {broken}")
         return 0
     if args.json:
         print(json.dumps([{"id": c.id, "level": c.level.value, "role": c.role.value, "title": c.title,

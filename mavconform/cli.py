@@ -11,8 +11,8 @@ import sys
 
 from reference_impl.errors import LocalProtocolError, UsageError
 
-from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, gcs_cmd, profiles_cmd,
-               report_cmd, run_cmd, vehicle_cmd)
+from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, fuzz_cmd, gcs_cmd, profiles_cmd,
+               proxy_cmd, report_cmd, run_cmd, vehicle_cmd)
 
 EXIT_USAGE = 2
 
@@ -39,6 +39,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo_cmd.add_parser(sub)
     profiles_cmd.add_parser(sub)
     fault_table_cmd.add_parser(sub)
+    fuzz_cmd.add_parser(sub)
+    proxy_cmd.add_parser(sub)
     return parser
 
 

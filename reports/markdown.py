@@ -12,7 +12,7 @@ from typing import Any
 from urllib.parse import quote
 
 from reports.run_document import OUTCOMES, PASS, outcome_counts
-from reports.text import identity_text, one_line, seconds
+from reports.text import document_identity, one_line, seconds
 
 DETAIL_LIMIT = 200  # characters of detail per table cell
 
@@ -34,7 +34,7 @@ def markdown_summary(doc: dict[str, Any]) -> str:
     summary, clauses = doc["summary"], doc["clauses"]
     passed = summary["verdict"] == "pass"
     out = [f"## {'✅ PASS' if passed else '❌ FAIL'}: {md(doc['run']['target'])} "
-           f"({md(identity_text(doc['identity']))}), "
+           f"({md(document_identity(doc))}), "
            f"{md(doc['tool']['name'])} {md(doc['tool']['version'])}",
            "",
            f"Started {md(doc['run']['started'])}, took {seconds(doc['run']['duration_s'])}; "

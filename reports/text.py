@@ -92,10 +92,10 @@ def exchange_lines(exchange: list[dict[str, Any]], limit: int = 300) -> list[str
     return lines
 
 
-def identity_text(identity: dict[str, Any] | None) -> str:
+def identity_text(identity: dict[str, Any] | None, missing: str = "no answer from the target") -> str:
     """"system 1 component 1, type 2, autopilot 4, MAVLink 2, at 127.0.0.1:40001"."""
     if identity is None:
-        return "no answer from the target"
+        return missing
     parts = [f"system {identity['system']} component {identity['component']}"]
     for key, word in (("type", "type"), ("autopilot", "autopilot"),
                       ("mavlink_version", "MAVLink")):
@@ -104,6 +104,12 @@ def identity_text(identity: dict[str, Any] | None) -> str:
     if identity.get("address"):
         parts.append(f"at {one_line(str(identity['address']))}")
     return ", ".join(parts)
+
+
+def document_identity(doc: dict[str, Any]) -> str:
+    """The target's identity as the document knows it (a fuzz campaign does not record it)."""
+    return identity_text(doc["identity"], "not recorded by a fuzz campaign" if "fuzz" in doc
+                         else "no answer from the target")
 
 
 def seconds(value: float) -> str:
@@ -115,7 +121,7 @@ def run_facts(doc: dict[str, Any]) -> list[tuple[str, str]]:
     """(label, value) pairs describing the run, known keys first, for the report headers."""
     run = doc["run"]
     facts = [("tool", f"{doc['tool']['name']} {doc['tool']['version']}"),
-             ("target", run["target"]), ("identity", identity_text(doc["identity"])),
+             ("target", run["target"]), ("identity", document_identity(doc)),
              ("started", run["started"]), ("duration", seconds(run["duration_s"]))]
     labels = {"seed": "seed", "time_scale": "time scale", "strict": "strict",
               "clauses": "clauses selected", "expectations": "expectations file",

@@ -1,0 +1,30 @@
+"""Frame fuzzer (`--mode frames`): byte-level faults in mission traffic, and a liveness oracle.
+
+Valid frames of every mission message (templates.py), from plausible GCS ids and addressed
+to the target, go through one mutator each (mutators.py: bad_crc, bad_length, truncate,
+bad_magic, unknown_msgid, v1_v2_mix, as_mavlink1, incompat_flags, wrong_key_signature,
+stale_timestamp, garbage_between, bit_flip, signed_flag_unsigned, random_bytes, unmutated)
+and are packed one to eight per datagram (program.py). What the target would accept as a
+plan-changing message never goes out intact (admission.py). After each batch the oracle
+(rig.py) wants: no exception in an in-process vehicle, its stored plans unchanged, a
+HEARTBEAT still coming, and a normal mission download that completes and returns the known
+plan. `builtin:` examples also run a vehicle that requires MAVLink 2 signing, so unsigned,
+wrong-key and stale frames must be ignored.
+
+    search(target, *, seed, max_examples=None, stop_after=None, database=None,
+           on_example=None) -> list[Case]
+    replay(case, *, capture=None) -> Violation | None
+"""
+
+from .engine import FrameCampaign, minimise, replay, search
+from .mutators import MUTATOR_NAMES, MUTATORS
+
+# What the oracle asserts after every batch (the report's rows, in this order).
+INVARIANTS = {
+    "still-answers": "The target keeps sending HEARTBEAT after any bytes on the wire",
+    "download-completes": "After the batch a normal mission download completes and returns the known plan",
+    "no-exception": "Bad bytes never raise inside the (in-process) vehicle",
+    "plan-unchanged": "Frames that fail to decode, or are refused, never change a stored plan",
+}
+
+__all__ = ["search", "replay", "minimise", "FrameCampaign", "MUTATORS", "MUTATOR_NAMES", "INVARIANTS"]

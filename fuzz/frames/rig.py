@@ -1,0 +1,346 @@
+"""The rig: one connection to the target, the sender of fuzz datagrams, and the oracle.
+
+One node plays both parts at the target's address book: the oracle GCS (a reference
+`GcsNode`, system 250, which the fuzz frames never claim to be) and the fuzzer, whose
+datagrams leave from the same socket (so a `udpin:` target, which answers one address,
+hears both).
+
+- In-process targets in virtual time (`SimNetwork`, `SimClock`): a fresh vehicle per
+  example, so every example, and its replay, starts from the same state and is exact.
+- Over UDP: one live target for the whole campaign (an in-process vehicle on loopback
+  sockets, or a real one at `udp:` / `udpin:`), with real, bounded waits.
+
+The oracle, after a batch (`check`):
+  no-exception        an in-process vehicle raised (GuardedNode caught it);
+  plan-unchanged      an in-process vehicle's stored plans differ from the known ones;
+  still-answers       no HEARTBEAT from the target within HEARTBEAT_WAIT after the batch;
+  download-completes  a normal mission download failed, or returned another plan than the
+                      download made right after the known plan was uploaded.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from typing import Any
+
+from conformance.harness import plans
+from conformance.target_uri import TargetUri
+from fuzz.case import Violation
+from reference_impl.errors import LocalProtocolError
+from reference_impl.gcs import GcsConfig, GcsNode
+from reference_impl.mission.items import PLAN_TYPES, MissionType
+from reference_impl.net.clock import MonotonicClock, SimClock
+from reference_impl.net.guard import GuardedNode
+from reference_impl.net.node import Address
+from reference_impl.net.sim import CaptureHook, SimNetwork
+from reference_impl.net.udp import UdpDriver
+from reference_impl.net.uri import local_bind_for
+from reference_impl.session import GcsSession
+from reference_impl.vehicle import VehicleConfig, VehicleNode
+from reference_impl.wire.signing import SigningKey
+
+from .admission import Admission
+from .mutators import MutationContext
+from .program import Builder
+
+ORACLE_ID = (250, 190)
+HEARTBEAT_WAIT = 2.5        # s: a 1 Hz HEARTBEAT may not pause longer than this
+DISCOVERY_WAIT = 5.0        # s for the first HEARTBEAT of a UDP target
+SETTLE_WAIT = 2.0           # s an in-process UDP vehicle gets to read a sent batch
+SEND_CHUNK = 32             # datagrams in flight at once over UDP (socket buffers are finite)
+PLAN_VARIANT = 7            # the known plan (conformance/harness/plans.py, variant 7)
+
+
+def campaign_key(seed: int, which: str = "target") -> bytes:
+    """The signing secret of a signing vehicle (or the wrong one), derived from the seed."""
+    return hashlib.sha256(f"mavconform-frames/{which}/{seed}".encode()).digest()
+
+
+def known_plans(in_process: bool) -> dict[MissionType, list]:
+    """What the rig uploads before fuzzing: every plan type in-process, where the store is
+    compared afterwards; only the mission elsewhere (a real target's fence is left alone)."""
+    types = PLAN_TYPES if in_process else (MissionType.MISSION,)
+    return {t: plans.plan(t, variant=PLAN_VARIANT) for t in types}
+
+
+class _Station:
+    """The oracle GCS plus the fuzzer's outbox, as one datagram node."""
+
+    def __init__(self, gcs: GcsNode, target_address: Address | None) -> None:
+        self.gcs = gcs
+        self.target_address = target_address
+        self.outbox: list[bytes] = []
+        self.last_heartbeat: float | None = None
+        self._heartbeat: Any = None
+
+    def datagram_received(self, data: bytes, source: Address, now: float) -> None:
+        gcs = self.gcs
+        gcs.datagram_received(data, source, now)
+        if gcs.target_heartbeat is not self._heartbeat:
+            self._heartbeat = gcs.target_heartbeat
+            self.last_heartbeat = now
+            if self.target_address is None:
+                self.target_address = source
+
+    def poll(self, now: float) -> None:
+        self.gcs.poll(now)
+
+    def next_deadline(self) -> float | None:
+        return self.gcs.next_deadline()
+
+    def take_outgoing(self) -> list[tuple[bytes, Address]]:
+        out = self.gcs.take_outgoing()
+        if self.outbox:
+            to = self.target_address
+            out.extend((d, to) for d in self.outbox)
+            self.outbox = []
+        return out
+
+
+class _Counted:
+    """A node wrapper counting the datagrams it was handed (what the target really read)."""
+
+    def __init__(self, node: Any) -> None:
+        self.node = node
+        self.received = 0
+
+    def datagram_received(self, data: bytes, source: Address, now: float) -> None:
+        self.received += 1
+        self.node.datagram_received(data, source, now)
+
+    def poll(self, now: float) -> None:
+        self.node.poll(now)
+
+    def next_deadline(self) -> float | None:
+        return self.node.next_deadline()
+
+    def take_outgoing(self) -> list[tuple[bytes, Address]]:
+        return self.node.take_outgoing()
+
+
+def build_vehicle(uri: TargetUri, key: bytes | None, wall_clock: Any) -> VehicleNode:
+    if uri.kind == "mutant":
+        from conformance.mutants import MUTANTS
+        return MUTANTS[uri.name].build(VehicleConfig())
+    base = VehicleConfig()
+    if uri.name != "spec":      # builtin:px4 / ardupilot: that profile's vehicle configuration
+        from reference_impl.profiles import load_profile
+        base = load_profile(uri.name).config
+    signing = SigningKey(key) if key is not None else None
+    config = dataclasses.replace(base, signing=signing, require_signature=signing is not None)
+    return VehicleNode(config, wall_clock=wall_clock)
+
+
+class Rig:
+    """A connected target, ready for batches. Call `start()` first; `close()` at the end."""
+
+    def __init__(self, uri: TargetUri, *, seed: int, signing: bool = False, virtual: bool = True,
+                 capture: CaptureHook | None = None, scale: float = 1.0) -> None:
+        if virtual and not uri.in_process:
+            raise ValueError("virtual time needs an in-process target")
+        if signing and uri.kind != "builtin":
+            raise ValueError("only builtin targets run a signing vehicle")
+        self.uri = uri
+        self.virtual = virtual
+        self.scale = scale
+        self.key = campaign_key(seed) if signing else None
+        self.clock: Any = SimClock() if virtual else MonotonicClock()
+        self.vehicle: VehicleNode | None = None
+        self.guard: GuardedNode | None = None
+        self.counted: _Counted | None = None
+        self.snapshot: Any = None
+        self.plans = known_plans(uri.in_process)
+        self.expected: tuple | None = None   # the mission as downloaded before the first batch
+        self.frames_sent = 0
+        self.datagrams_sent = 0
+        gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],
+                               signing=SigningKey(self.key) if self.key else None)
+        wall = self.clock.wall
+        if uri.in_process:
+            self.vehicle = build_vehicle(uri, self.key, wall)
+            self.guard = GuardedNode(self.vehicle)
+            self.counted = _Counted(self.guard)
+            gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],
+                                   target=(self.vehicle.config.system, self.vehicle.config.component),
+                                   signing=gcs_config.signing)
+        self.gcs = GcsNode(gcs_config, wall_clock=wall)
+        if virtual:
+            self.driver: Any = SimNetwork(seed, self.clock)
+            self.station = _Station(self.gcs, "vehicle")
+            self.driver.add_node("vehicle", self.counted)
+            self.driver.add_node("gcs", self.station)
+            self.driver.connect("gcs", "vehicle")
+            self.vehicle.endpoint.add_address("gcs")
+            self.gcs.endpoint.add_address("vehicle")
+        else:
+            self.driver = UdpDriver(self.clock, seed=seed)
+            try:
+                if uri.in_process:
+                    where = self.driver.add_node(self.counted)
+                    self.station = _Station(self.gcs, where)
+                    here = self.driver.add_node(self.station)
+                    self.vehicle.endpoint.add_address(here)
+                    self.gcs.endpoint.add_address(where)
+                elif uri.kind == "udp":
+                    self.station = _Station(self.gcs, uri.udp.address)
+                    self.driver.add_node(self.station, bind=(local_bind_for(uri.udp.host), 0))
+                    self.gcs.endpoint.add_address(uri.udp.address)
+                else:   # udpin: the target sends first; its address is learned
+                    self.station = _Station(self.gcs, None)
+                    self.driver.add_node(self.station, bind=uri.udp.address)
+            except BaseException:
+                self.driver.close()
+                raise
+        if capture is not None:
+            self.driver.add_capture(capture)
+        self.session = GcsSession(self.driver, self.gcs)
+        ctx = MutationContext(key=self.key or campaign_key(seed), wrong_key=campaign_key(seed, "wrong"),
+                              wall_clock=wall)
+        self._target: tuple[int, int] | None = None
+        self._ctx = ctx
+        self.builder: Builder | None = None
+
+    # --- lifecycle ------------------------------------------------------------------------
+    def start(self) -> Violation | None:
+        """Find the target, upload the known plans; a Violation if the target is dead."""
+        # the first HEARTBEAT too (an in-process target is known already): the oracle GCS may
+        # adapt to the autopilot it names, and must do so before the reference download
+        station = self.station
+        if not self.driver.run_until(lambda: self.gcs.connected and station.target_address is not None
+                                     and station.last_heartbeat is not None,
+                                     timeout=DISCOVERY_WAIT * self.scale):
+            return Violation("still-answers", f"no HEARTBEAT from {self.uri} within "
+                             f"{DISCOVERY_WAIT * self.scale:g} s, before any fuzz frame was sent")
+        self._target = self.gcs.target
+        admission = Admission(self.key, self.key is not None, self._ctx.wall_clock)
+        self.builder = Builder(self._target, self._ctx, admission, sign_frames=self.key is not None)
+        for t, items in list(self.plans.items()):
+            result = self._operation(lambda: self.session.upload(t, items))
+            if result is None or not result.ok:
+                what = "no result" if result is None else result.summary()
+                if t is MissionType.MISSION or self._crash() is not None:
+                    return self._crash_violation() or Violation(
+                        "download-completes", f"the known {t.label} plan could not be uploaded before "
+                        f"fuzzing ({what})")
+                del self.plans[t]       # e.g. a vehicle that stores no fence: judged without one
+        # What "the known plan" downloads as (a profile may store it transformed, e.g. with a
+        # home item): every later download must equal this one.
+        result = self._operation(lambda: self.session.download(MissionType.MISSION))
+        if result is None or not result.ok:
+            return self._crash_violation() or Violation(
+                "download-completes", "the known mission could not be downloaded before fuzzing "
+                f"({'no result' if result is None else result.summary()})")
+        self.expected = result.items
+        if self.vehicle is not None:
+            self.snapshot = self.vehicle.store.snapshot()
+        return None
+
+    def close(self) -> None:
+        if not self.virtual:
+            self.driver.close()
+
+    # --- sending --------------------------------------------------------------------------
+    def send(self, frames: list[bytes]) -> None:
+        """Queue one datagram (the frames back to back)."""
+        self.station.outbox.append(b"".join(frames))
+        self.frames_sent += len(frames)
+        self.datagrams_sent += 1
+
+    def flush(self) -> None:
+        """Deliver what is queued: in virtual time, at once; over UDP, in chunks the target
+        can read (an in-process target is waited for, bounded)."""
+        if self.virtual:
+            self.driver.run_until_quiet(timeout=0.0)
+            return
+        counted = self.counted
+        if counted is None:
+            self.driver.run_until(_always, timeout=0.0)
+            return
+        pending, self.station.outbox = self.station.outbox, []
+        base = counted.received
+        for i in range(0, len(pending), SEND_CHUNK):
+            chunk = pending[i:i + SEND_CHUNK]
+            self.station.outbox.extend(chunk)
+            want = base + i + len(chunk)
+            self.driver.run_until(lambda: counted.received >= want or self._crash() is not None,
+                                  timeout=SETTLE_WAIT)
+
+    def crashed(self) -> Violation | None:
+        return self._crash_violation()
+
+    # --- the oracle -----------------------------------------------------------------------
+    def check(self, *, lazy_heartbeat: bool = False) -> Violation | None:
+        """Judge the target after a batch (see the module docstring). `lazy_heartbeat` (long
+        UDP campaigns) accepts a HEARTBEAT heard up to HEARTBEAT_WAIT before now instead of
+        waiting for one after the batch, so a live target costs no wait at all."""
+        v = self._crash_violation() or self._store_violation()
+        if v is not None:
+            return v
+        wait = HEARTBEAT_WAIT * self.scale
+        now = self.driver.clock.now()
+        since = now - wait if lazy_heartbeat else now
+        station = self.station
+        heard = self.driver.run_until(
+            lambda: (station.last_heartbeat is not None and station.last_heartbeat > since)
+            or self._crash() is not None, timeout=wait)
+        v = self._crash_violation()
+        if v is not None:
+            return v
+        if not heard:
+            return Violation("still-answers", f"no HEARTBEAT from the target within {wait:g} s after the batch "
+                             f"(it had sent them at 1 Hz before)")
+        result = self._operation(lambda: self.session.download(MissionType.MISSION))
+        v = self._crash_violation() or self._store_violation()
+        if v is not None:
+            return v
+        want = self.expected
+        if result is None or not result.ok:
+            what = "no result within the client's own bound" if result is None else result.summary()
+            return Violation("download-completes", f"a normal mission download after the batch did not "
+                             f"complete: {what}")
+        if result.items != want:
+            return Violation("download-completes", "the mission downloaded after the batch is not the known "
+                             f"plan: {_plan_diff(want, result.items)}")
+        return None
+
+    # --- internals ------------------------------------------------------------------------
+    def _operation(self, run: Any) -> Any:
+        try:
+            return run()
+        except LocalProtocolError:
+            return None
+
+    def _crash(self) -> str | None:
+        return self.guard.crash if self.guard is not None else None
+
+    def _crash_violation(self) -> Violation | None:
+        crash = self._crash()
+        if crash is None:
+            return None
+        return Violation("no-exception", f"the vehicle raised {crash}; from outside it fell silent")
+
+    def _store_violation(self) -> Violation | None:
+        if self.vehicle is None or self.snapshot is None:
+            return None
+        now = self.vehicle.store.snapshot()
+        for t in PLAN_TYPES:
+            if now[t] != self.snapshot[t]:
+                return Violation("plan-unchanged", f"the stored {t.label} plan changed during the batch: "
+                                 f"{_plan_diff(self.snapshot[t], now[t])}")
+        return None
+
+
+def _plan_diff(want: tuple, got: tuple | None) -> str:
+    if got is None:
+        return "nothing came back"
+    if len(want) != len(got):
+        return f"{len(got)} items instead of {len(want)}"
+    for a, b in zip(want, got):
+        if a != b:
+            return f"item {a.seq} differs ({b} instead of {a})"
+    return "equal"
+
+
+def _always() -> bool:
+    return True

@@ -1,0 +1,151 @@
+"""The fuzzer's GCS: the reference `MissionClient` for operations, raw sends for the rest.
+
+Well-formed operations go through the reference client, which is also the judge of
+"every operation ends with exactly one result". What the client would never send (stray
+ACKs, items nobody asked for, wrong ids) goes out raw through the same endpoint, so the
+vehicle sees it from the same GCS. An upload's wire items may carry a `seq` or
+`mission_type` other than the transfer's (seq gaps, another plan type): the client
+answers the vehicle's requests as usual and the node rewrites those fields on the way
+out.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from typing import Any, Callable, Sequence
+
+from reference_impl.endpoint import MavlinkEndpoint
+from reference_impl.mission.actions import Finished, Peer, Send
+from reference_impl.mission.client import MissionClient
+from reference_impl.mission.items import MissionItem, MissionType
+from reference_impl.mission.results import OperationResult
+from reference_impl.mission.timing import Timings
+from reference_impl.net.node import Address
+from reference_impl.wire.dialect import mavlink as _d
+
+MAV_TYPE_GCS = 6
+MAV_AUTOPILOT_INVALID = 8
+HEARTBEAT_PERIOD = 1.0
+_ITEMS = ("MISSION_ITEM_INT", "MISSION_ITEM")
+
+
+class FuzzGcs:
+    """A `DatagramNode`. Until `target` is known (discovery), it only listens for an
+    autopilot's HEARTBEAT; `results` collects every operation result in finishing order.
+    A `mute` GCS sends what it is told and never answers anything: a GCS that crashed or
+    left mid-transfer, which only the vehicle's own timeouts can end."""
+
+    def __init__(self, system: int, component: int, target: Peer | None, *,
+                 timings: Timings | None = None, heartbeat: bool = False, mute: bool = False,
+                 wall_clock: Callable[[], float] = time.time) -> None:
+        self.endpoint = MavlinkEndpoint(system, component, wall_clock=wall_clock)
+        self.timings = timings or Timings()
+        self.heartbeat = heartbeat
+        self.mute = mute
+        self.results: list[OperationResult] = []
+        self.heard: list[Any] = []          # messages from the target since `listen()`
+        self.listening = False
+        self.counts: dict[int, int] = {}    # mission_type -> first MISSION_COUNT to us since `listen()`
+        self.client: MissionClient | None = None
+        self.target: Peer | None = None
+        self._rewrite: dict[int, dict[str, int]] = {}
+        self._next_heartbeat: float | None = 0.0 if heartbeat else None
+        if target is not None:
+            self.set_target(target)
+
+    @property
+    def system(self) -> int:
+        return self.endpoint.system
+
+    def set_target(self, target: Peer) -> None:
+        self.target = target
+        self.client = MissionClient(self.endpoint.system, self.endpoint.component, target, self.timings)
+
+    # --- operations -----------------------------------------------------------------------
+    @property
+    def busy(self) -> bool:
+        return self.client is not None and self.client.busy
+
+    def upload(self, mission_type: MissionType, items: Sequence[MissionItem],
+               rewrite: dict[int, dict[str, int]], *, as_float: bool, now: float) -> None:
+        """Upload `items`; item k goes out with the fields in `rewrite[k]` replaced."""
+        client = self._client()
+        self._rewrite = rewrite
+        client.upload_int = not as_float
+        self._run(client.upload(mission_type, items, now))
+
+    def download(self, mission_type: MissionType, now: float) -> None:
+        self._run(self._client().download(mission_type, now))
+
+    def clear(self, mission_type: MissionType, now: float) -> None:
+        self._run(self._client().clear(mission_type, now))
+
+    def set_current(self, seq: int, now: float, *, via_command: bool) -> None:
+        self._run(self._client().set_current(seq, now, via_command=via_command))
+
+    def cancel(self, now: float) -> None:
+        self._run(self._client().cancel(now))
+
+    def send_raw(self, msg: Any) -> None:
+        """Send any message to the target's address, exactly as given."""
+        self.endpoint.send(msg, self.target)
+
+    def listen(self) -> None:
+        """Start collecting what the target says (for probes and download bounds)."""
+        self.heard, self.counts, self.listening = [], {}, True
+
+    # --- DatagramNode ---------------------------------------------------------------------
+    def datagram_received(self, data: bytes, source: Address, now: float) -> None:
+        for frame in self.endpoint.receive(data, source):
+            msg = frame.msg
+            if self.target is None:
+                if (msg._type == "HEARTBEAT" and msg.type != MAV_TYPE_GCS
+                        and msg.autopilot != MAV_AUTOPILOT_INVALID):
+                    self.set_target((frame.src_system, frame.src_component))
+                continue
+            if (frame.src_system, frame.src_component) != self.target:
+                continue
+            if self.listening and len(self.heard) < 1000:
+                self.heard.append(msg)
+                if (msg._type == "MISSION_COUNT" and msg.target_system == self.system
+                        and msg.mission_type not in self.counts):
+                    self.counts[msg.mission_type] = msg.count
+            if not self.mute:
+                self._run(self.client.handle(frame, now))
+
+    def poll(self, now: float) -> None:
+        if self.client is not None:
+            self._run(self.client.poll(now))
+        if self._next_heartbeat is not None and now >= self._next_heartbeat:
+            self._next_heartbeat = now + HEARTBEAT_PERIOD
+            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3))
+
+    def next_deadline(self) -> float | None:
+        d = self.client.next_deadline() if self.client is not None else None
+        hb = self._next_heartbeat
+        if d is None:
+            return hb
+        return d if hb is None or d < hb else hb
+
+    def take_outgoing(self) -> list[tuple[bytes, Address]]:
+        return self.endpoint.take_outgoing()
+
+    # --- internals ------------------------------------------------------------------------
+    def _client(self) -> MissionClient:
+        if self.client is None:
+            raise RuntimeError("FuzzGcs has no target yet")
+        return self.client
+
+    def _run(self, actions: list[Any]) -> None:
+        send = self.endpoint.send
+        for action in actions:
+            if isinstance(action, Send):
+                msg = action.msg
+                if self._rewrite and msg._type in _ITEMS and msg.seq in self._rewrite:
+                    msg = copy.copy(msg)   # the client keeps the original to resend
+                    for name, value in self._rewrite[action.msg.seq].items():
+                        setattr(msg, name, value)
+                send(msg, action.to)
+            elif isinstance(action, Finished):
+                self.results.append(action.result)

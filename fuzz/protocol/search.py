@@ -1,0 +1,169 @@
+"""`search` and `replay` for the protocol mode (the contract in fuzz/__init__ users rely on).
+
+Seeding: Hypothesis draws from a `Random` seeded by the campaign seed (and the chunk
+number), so the same seed and `max_examples` run the same examples, finding for finding.
+The example database, when given, is keyed by the target and the knobs, not the seed, so
+an example that failed in one shard is tried first by every later run on that target.
+
+Wall-time budget: Hypothesis has none, and an exception thrown out of a running test
+confuses its shrinker, so a budgeted search runs in chunks (each a complete Hypothesis run
+of a few examples, seeded from the campaign seed and the chunk number) and draws no new
+chunk once the budget is spent. A finding ends the search: its chunk has shrunk it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from typing import Any, Callable
+
+from hypothesis import HealthCheck, Phase, Verbosity, settings
+from hypothesis.database import ExampleDatabase
+from hypothesis.stateful import get_state_machine_test
+
+from conformance.target_uri import parse_target
+from reference_impl.errors import UsageError
+from reference_impl.net.sim import CaptureHook, stable_seed
+
+from ..case import Case, Violation
+from .machine import Finding, Knobs, machine_class
+from .steps import Runner
+
+MODE = "protocol"
+DEFAULT_EXAMPLES = 100
+FIRST_CHUNK = 8             # examples in the first chunk of a budgeted search
+MAX_CHUNK = 500
+_OPS = {"upload": ("type", "items"), "download": ("type",), "clear": ("type",),
+        "set_current": ("seq",), "cancel": ("of", "after"), "second_gcs": ("first", "second", "after"),
+        "stray": ("messages", "after"), "faults": (), "wait": ("seconds",)}
+
+
+def search(target: str, *, seed: int, max_examples: int | None = None,
+           stop_after: float | None = None, database: ExampleDatabase | None = None,
+           on_example: Callable[[int], None] | None = None,
+           knobs: Knobs | None = None) -> list[Case]:
+    """Run the protocol state machine against `target`; return the shrunk findings."""
+    parse_target(target)
+    knobs = Knobs(target=target) if knobs is None else _with_target(knobs, target)
+    if max_examples is None and stop_after is None:
+        max_examples = DEFAULT_EXAMPLES
+    deadline = None if stop_after is None else time.monotonic() + stop_after
+    done = 0
+    chunk = 0
+    rate = 0.0   # examples per second so far, to size the next chunk
+    while True:
+        left = None if max_examples is None else max_examples - done
+        if (left is not None and left <= 0) or (deadline is not None and time.monotonic() >= deadline):
+            return []
+        size = left if deadline is None else _chunk_size(rate, deadline - time.monotonic(), left)
+        counted = [0]
+
+        def example_done(units: int) -> None:
+            counted[0] += 1
+            if on_example is not None:
+                on_example(units)
+
+        t0 = time.monotonic()
+        found = _run_chunk(knobs, seed, chunk, size, database, example_done)
+        done += counted[0]
+        rate = counted[0] / max(time.monotonic() - t0, 1e-6)
+        if found:
+            return [_case(f, knobs, seed, chunk, done) for f in found]
+        chunk += 1
+
+
+def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | None:
+    """Re-run the case's steps (in virtual time for in-process targets); the first broken
+    invariant, or None."""
+    for i, step in enumerate(case.steps):
+        _check_step(step, f"step {i}")
+    runner = Runner(case.target, case.seed, capture=capture, atomic=case.found_by.get("atomic"))
+    try:
+        for step in case.steps:
+            violation = runner.apply(step) or runner.check()
+            if violation is not None:
+                return violation
+        return None
+    finally:
+        runner.close()
+
+
+# --- internals -------------------------------------------------------------------------------
+
+def _chunk_size(rate: float, time_left: float, left: int | None) -> int:
+    """Half the remaining budget's worth of examples at the last rate (a small first chunk)."""
+    size = FIRST_CHUNK if rate <= 0 else int(rate * max(time_left, 0.0) / 2)
+    size = max(1, min(size, MAX_CHUNK))
+    return size if left is None else min(size, left)
+
+
+def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: ExampleDatabase | None,
+               on_example: Callable[[int], None]) -> list[Finding]:
+    machine = machine_class(knobs, on_example=on_example)
+    test = get_state_machine_test(machine, settings=settings(
+        max_examples=size, stateful_step_count=knobs.steps, deadline=None, database=database,
+        derandomize=False, suppress_health_check=list(HealthCheck), verbosity=Verbosity.quiet,
+        phases=(Phase.explicit, Phase.reuse, Phase.generate, Phase.shrink),
+        report_multiple_bugs=True, print_blob=False))
+    # Database key: the machine and the knobs (seed left out, so shards share findings).
+    test.hypothesis.inner_test._hypothesis_internal_add_digest = hashlib.sha256(
+        repr(("mavconform-protocol-fuzz/1", knobs)).encode()).digest()
+    test._hypothesis_internal_use_seed = stable_seed("protocol", seed, chunk)
+    try:
+        test()
+    except BaseException as exc:   # noqa: BLE001 - sorted below: findings, or re-raised
+        findings, others = _split(exc)
+        if others or not findings:
+            raise
+        return _smallest_per_invariant(findings)
+    return []
+
+
+def _split(exc: BaseException) -> tuple[list[Finding], list[BaseException]]:
+    if isinstance(exc, Finding):
+        return [exc], []
+    if isinstance(exc, BaseExceptionGroup):
+        findings: list[Finding] = []
+        others: list[BaseException] = []
+        for inner in exc.exceptions:
+            f, o = _split(inner)
+            findings += f
+            others += o
+        return findings, others
+    return [], [exc]
+
+
+def _smallest_per_invariant(findings: list[Finding]) -> list[Finding]:
+    best: dict[str, Finding] = {}
+    for f in findings:
+        old = best.get(f.violation.invariant)
+        if old is None or len(f.steps) < len(old.steps):
+            best[f.violation.invariant] = f
+    return list(best.values())
+
+
+def _case(found: Finding, knobs: Knobs, seed: int, chunk: int, examples: int) -> Case:
+    found_by: dict[str, Any] = {"search_seed": seed, "chunk": chunk, "examples": examples,
+                                "max_items": knobs.max_items, "min_items": knobs.min_items,
+                                "steps_per_example": knobs.steps, "faults": knobs.faults,
+                                "max_wait": knobs.max_wait}
+    if knobs.atomic is not None:
+        found_by["atomic"] = knobs.atomic
+    return Case(MODE, knobs.target, found.seed, tuple(found.steps), found.violation, found_by)
+
+
+def _with_target(knobs: Knobs, target: str) -> Knobs:
+    from dataclasses import replace
+    return replace(knobs, target=target)
+
+
+def _check_step(step: Any, where: str) -> None:
+    """A saved case is a file a user may have edited: a bad step is a usage error."""
+    if not isinstance(step, dict) or step.get("op") not in _OPS:
+        raise UsageError(f"{where}: expected an object with op one of {', '.join(_OPS)}, got {step!r:.80}")
+    missing = [k for k in _OPS[step["op"]] if k not in step]
+    if missing:
+        raise UsageError(f"{where}: {step['op']} step lacks {', '.join(missing)}")
+    for key in ("of", "first", "second", "during"):
+        if step.get(key) is not None:
+            _check_step(step[key], f"{where}.{key}")

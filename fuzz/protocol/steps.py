@@ -1,0 +1,446 @@
+"""Protocol fuzz steps: what each one does to the world, and the invariants after it.
+
+A step is a JSON-safe dict; the Hypothesis machine draws them and a saved case replays
+them, both through `Runner.apply` then `Runner.check`, so a case replays exactly what the
+search ran. The vocabulary (drawn by `fuzz.strategies`):
+
+  {"op": "upload", "type": T, "items": [WIRE_ITEM...], "float": bool?}   GCS A, to its result
+  {"op": "download", "type": T} / {"op": "clear", "type": T|255}
+  {"op": "set_current", "seq": N, "command": bool}
+  {"op": "cancel", "of": OP, "after": S}          start OP, cancel it S seconds in
+  {"op": "second_gcs", "first": OP, "second": OP, "after": S}   B starts `second` S s into A's `first`
+  {"op": "stray", "messages": [RAW...], "during": OP|null, "after": S}
+  {"op": "faults", "up": SCHEDULE|null, "down": SCHEDULE|null}   on A's link, from now on
+  {"op": "wait", "seconds": S}
+
+WIRE_ITEM is a dict of MISSION_ITEM_INT fields (a "seq"/"mission_type" key overrides what
+goes out); RAW is {"msg": NAME, "fields": {...}, "to": "target"|"broadcast"|
+"other-system"|"other-component", "from": "a"|"b"|"mute"} ("mute" never answers).
+
+Operations run until their result, bounded by the protocol's own timeouts; then every
+node is given a bounded time to return to idle. The invariants (`INVARIANTS`) are checked
+after every step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from reference_impl.mission import messages as m
+from reference_impl.mission.constants import MissionResult
+from reference_impl.mission.items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
+from reference_impl.mission.results import OperationResult
+from reference_impl.mission.transitions import SlotState
+from reference_impl.net.sim import CaptureHook
+from reference_impl.wire.dialect import mavlink as _d
+
+from ..case import Violation
+from .faults import build_fault_model
+from .gcs import FuzzGcs
+from .versions import Plan, Versions, Write, describe_plan
+from .world import World
+
+INVARIANTS: dict[str, str] = {
+    "atomic-upload": "The vehicle's stored plan of each type is always one whole version it "
+                     "accepted (or the initial or cleared one), never a mix of two (spec profile).",
+    "download-matches-upload": "A successful download returns the plan last accepted (one of "
+                               "the versions the vehicle may hold).",
+    "one-result": "Every operation ends with exactly one result, within a bound derived from "
+                  "the protocol's timeouts and retry limit.",
+    "idle": "After every step, the vehicle and every GCS return to idle within a bound derived "
+            "from the protocol's timeouts.",
+    "retry-limit": "Neither end resends one request more often than the retry limit.",
+    "still-answers": "After every step the vehicle still answers MISSION_REQUEST_LIST.",
+    "crash": "No node raises: an exception in the in-process vehicle (or our GCS) is a finding.",
+}
+
+MAX_ROUNDS = 10_000   # bound on the wait loop of one step (each round advances time or ends)
+UDP_DRAIN = 0.3       # s after stray messages over a real network, for their replies to land
+
+
+@dataclass
+class _Run:
+    gcs: FuzzGcs
+    name: str
+    op: dict[str, Any]
+    done: int                     # len(gcs.results) when it started
+    started: float
+    plans: tuple[Plan, ...] = ()  # upload: what the vehicle may store if it applies it
+    result: OperationResult | None = None
+    # Its GCS sent stray messages meanwhile: the vehicle's replies to those carry no
+    # correlation id and may be taken for this operation's answer, so its result says
+    # nothing definite about the vehicle (a clear "refused" by a late reply to a stray).
+    untrusted: bool = False
+
+    @property
+    def finished(self) -> bool:
+        return len(self.gcs.results) > self.done
+
+
+@dataclass
+class _Group:
+    """What one step did that the oracle must hear about."""
+
+    runs: list[_Run] = field(default_factory=list)
+    writes: list[Write] = field(default_factory=list)
+    strays: bool = False   # raw messages went out: their replies may still be on the way
+
+
+class Runner:
+    """Applies steps to a fresh `World` and checks the invariants after each."""
+
+    def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
+                 atomic: bool | None = None) -> None:
+        self.world = w = World(target, seed, capture=capture, atomic=atomic)
+        self.index = -1
+        initial = {t: w.stored(t) for t in PLAN_TYPES}   # None over the wire: unknown
+        self.versions = Versions(initial, atomic=w.profile.atomic)
+        t = w.profile.timings
+        self.idle_bound = (t.default_timeout * (t.max_retries + 1)       # a download left open
+                           + t.item_timeout * (t.max_retries + 1)        # an upload left silent
+                           + 2 * t.default_timeout)
+
+    def close(self) -> None:
+        self.world.close()
+
+    # --- the two entry points -------------------------------------------------------------
+    def apply(self, step: dict[str, Any]) -> Violation | None:
+        """Run one step; a violation seen while it ran (results, idleness) is returned."""
+        self.index += 1
+        w = self.world
+        if w.unresponsive is not None:
+            return self._violation("still-answers", w.unresponsive)
+        kind = step.get("op")
+        handler: Callable[[dict[str, Any]], _Group | Violation | None] = {
+            "upload": self._operation, "download": self._operation, "clear": self._operation,
+            "set_current": self._operation, "cancel": self._cancel, "second_gcs": self._second_gcs,
+            "stray": self._stray, "faults": self._faults, "wait": self._wait,
+        }[kind]
+        group = handler(step)
+        if group is None or isinstance(group, Violation):
+            return group
+        return self._conclude(group)
+
+    def check(self) -> Violation | None:
+        """The invariants that hold between steps."""
+        w = self.world
+        if w.unresponsive is not None:
+            return self._violation("still-answers", w.unresponsive)
+        crashed = w.crashes()
+        if crashed:
+            return self._violation("crash", f"a node raised and fell silent: {crashed[0]}")
+        if w.vehicle is not None:
+            for t in PLAN_TYPES:
+                stored = w.stored(t)
+                if not self.versions.allows(t, stored):
+                    return self._violation("atomic-upload", (
+                        f"the vehicle stores {describe_plan(stored)} as its {t.label} plan, which is "
+                        f"none of the versions it accepted or may have applied "
+                        f"({self.versions.describe(t)}): a partial or invented plan"))
+                self.versions.observe(t, stored)
+            limit = w.profile.timings.max_retries
+            retries = w.vehicle.server.stats.max_consecutive_retries
+            if retries > limit:
+                return self._violation("retry-limit", (
+                    f"the vehicle resent one item request {retries} times; the limit is {limit}"))
+        return self._probe()
+
+    # --- steps ----------------------------------------------------------------------------
+    def _operation(self, step: dict[str, Any]) -> _Group:
+        return _Group(runs=[self._start(self.world.a, "A", step)])
+
+    def _cancel(self, step: dict[str, Any]) -> _Group:
+        run = self._start(self.world.a, "A", step["of"])
+        self.world.run_until(lambda: run.finished, float(step["after"]))
+        if not run.finished:
+            self.world.a.cancel(self.world.now())
+        return _Group(runs=[run])
+
+    def _second_gcs(self, step: dict[str, Any]) -> _Group:
+        first = self._start(self.world.a, "A", step["first"])
+        self.world.run_until(lambda: first.finished, float(step["after"]))
+        return _Group(runs=[first, self._start(self.world.b, "B", step["second"])])
+
+    def _stray(self, step: dict[str, Any]) -> _Group:
+        group = _Group(strays=True)
+        during = step.get("during")
+        if during:
+            run = self._start(self.world.a, "A", during)
+            group.runs.append(run)
+            self.world.run_until(lambda: run.finished, float(step["after"]))
+            run.untrusted = not run.finished and any(raw.get("from", "a") == "a" for raw in step["messages"])
+        for raw in step["messages"]:
+            gcs = self.world.gcss[raw.get("from", "a")]
+            msg = self._raw_message(raw)
+            gcs.send_raw(msg)
+            write = self._raw_write(raw)
+            if write is not None:
+                group.writes.append(write)
+        return group
+
+    def _faults(self, step: dict[str, Any]) -> None:
+        now = self.world.now()
+        self.world.set_faults(build_fault_model(step.get("up"), now),
+                              build_fault_model(step.get("down"), now))
+        return None
+
+    def _wait(self, step: dict[str, Any]) -> _Group:
+        self.world.run_for(float(step["seconds"]))
+        return _Group()
+
+    # --- running operations ---------------------------------------------------------------
+    def _start(self, gcs: FuzzGcs, name: str, op: dict[str, Any]) -> _Run:
+        w = self.world
+        now = w.now()
+        gcs.listen()
+        run = _Run(gcs, name, op, len(gcs.results), now)
+        kind = op["op"]
+        if kind == "upload":
+            t = MissionType(op["type"])
+            items, rewrite = wire_to_items(op["items"], t)
+            run.plans = (tuple(items),)
+            gcs.upload(t, items, rewrite, as_float=bool(op.get("float")), now=now)
+        elif kind == "download":
+            gcs.download(MissionType(op["type"]), now)
+        elif kind == "clear":
+            gcs.clear(MissionType(op["type"]), now)
+        elif kind == "set_current":
+            gcs.set_current(int(op["seq"]), now, via_command=bool(op.get("command")))
+        else:
+            raise ValueError(f"not an operation: {op!r}")
+        return run
+
+    def _bound(self, run: _Run) -> float:
+        """How long an operation may take: every message of it retried to the limit."""
+        t = run.gcs.timings
+        op = run.op
+        if op["op"] == "upload":
+            n = len(op["items"])
+        elif op["op"] == "download":
+            n = run.gcs.counts.get(op["type"], 0)   # grows once the vehicle says its count
+        else:
+            n = 0
+        return t.default_timeout * (t.max_retries + 2) * max(n + 2, 2)
+
+    def _wait_for_results(self, runs: list[_Run]) -> Violation | None:
+        w = self.world
+        for _ in range(MAX_ROUNDS):
+            pending = [r for r in runs if not r.finished]
+            if not pending:
+                return None
+            now = w.now()
+            limit, late = min(((r.started + self._bound(r), r) for r in pending), key=lambda p: p[0])
+            if now >= limit:
+                crashed = w.crashes()
+                if crashed:
+                    return self._violation("crash", f"a node raised and fell silent: {crashed[0]}")
+                return self._violation("one-result", (
+                    f"{describe_op(late.op)} by GCS {late.name} had no result {limit - late.started:g} s "
+                    f"after it started (the bound from the protocol's timeouts and retry limit)"))
+            w.run_until(lambda: all(r.finished for r in runs), limit - now)
+        return self._violation("one-result", "the operations of this step did not settle (wait loop bound)")
+
+    def _conclude(self, group: _Group) -> Violation | None:
+        v = self._wait_for_results(group.runs)
+        if v is not None:
+            return v
+        writes = list(group.writes)
+        reads: list[tuple[MissionType, Plan]] = []
+        for run in group.runs:
+            result = run.result = run.gcs.results[run.done]
+            limit = run.gcs.timings.max_retries
+            if result.max_consecutive_retries > limit:
+                return self._violation("retry-limit", (
+                    f"GCS {run.name} resent one message {result.max_consecutive_retries} times during "
+                    f"{describe_op(run.op)}; the limit is {limit}"))
+            writes += self._op_writes(run)
+            if run.op["op"] == "download" and result.ok:
+                reads.append((MissionType(run.op["type"]), tuple(result.items or ())))
+        touched = {t for wr in writes for t in wr.types}
+        for t, plan in reads:
+            candidates = [p for wr in writes if t in wr.types for p in wr.plans]
+            if not (self.versions.allows(t, plan) or plan in candidates):
+                return self._violation("download-matches-upload", (
+                    f"a download of the {t.label} plan returned {describe_plan(plan)}, which is none "
+                    f"of the versions the vehicle accepted ({self.versions.describe(t)})"))
+        self.versions.apply(writes)
+        for t, plan in reads:
+            if t not in touched:
+                self.versions.observe(t, plan)
+        v = self._settle(group)
+        if v is not None:
+            return v
+        for run in group.runs:
+            extra = len(run.gcs.results) - run.done
+            if extra != 1:
+                return self._violation("one-result", (
+                    f"{describe_op(run.op)} by GCS {run.name} ended with {extra} results"))
+        return None
+
+    def _op_writes(self, run: _Run) -> list[Write]:
+        op, result = run.op, run.result
+        assert result is not None
+        confirmed = result.ok and not run.untrusted
+        maybe = not confirmed and (result.outcome_unknown or run.untrusted)
+        if op["op"] == "upload":
+            plans = run.plans
+            asked_float = any(msg._type == m.REQUEST_FLOAT for msg in run.gcs.heard)
+            if op.get("float") or asked_float:
+                variant = float_variant(plans[0])
+                if variant is not None and variant != plans[0]:
+                    plans = plans + (variant,)
+            return [Write((MissionType(op["type"]),), plans, confirmed, maybe)]
+        if op["op"] == "clear":
+            types = PLAN_TYPES if op["type"] == MissionType.ALL else (MissionType(op["type"]),)
+            return [Write(types, ((),), confirmed, maybe)]
+        return []
+
+    def _settle(self, group: _Group) -> Violation | None:
+        """Wait (bounded) until both ends are idle and, in virtual time, nothing is in
+        flight: a late reply must not land in the next step's operation, where the GCS
+        could take it for an answer (replies carry no request id)."""
+        w = self.world
+        gcss = (w.a, w.b)
+        if group.strays and not w.virtual:
+            w.run_for(UDP_DRAIN)   # replies to stray messages: let them arrive now
+        if w.run_until(lambda: w.vehicle_idle() and not any(g.busy for g in gcss) and w.quiet(),
+                       self.idle_bound):
+            return None
+        if not w.vehicle_idle():
+            busy = ", ".join(f"{t.label} {w.vehicle.server.state(t).name}" for t in PLAN_TYPES
+                             if w.vehicle.server.state(t) is not SlotState.IDLE)
+            return self._violation("idle", (
+                f"the vehicle was still busy ({busy}) {self.idle_bound:g} s after the step's "
+                f"operations ended"))
+        names = [n for n, g in (("A", w.a), ("B", w.b)) if g.busy]
+        if names:
+            return self._violation("idle", f"GCS {', '.join(names)} still busy {self.idle_bound:g} s after its result")
+        return self._violation("idle", (
+            f"the link never fell quiet in {self.idle_bound:g} s after the step's operations ended "
+            f"({w.driver.in_flight()} datagrams in flight): a message storm"))
+
+    # --- stray messages -------------------------------------------------------------------
+    def _addressed(self, raw: dict[str, Any]) -> tuple[int, int]:
+        ts, tc = self.world.target
+        return {"target": (ts, tc), "broadcast": (0, 0), "other-system": ((ts % 250) + 1, tc),
+                "other-component": (ts, (tc % 250) + 1)}[raw.get("to", "target")]
+
+    def _raw_message(self, raw: dict[str, Any]) -> Any:
+        cls = getattr(_d, f"MAVLink_{raw['msg'].lower()}_message")
+        ts, tc = self._addressed(raw)
+        return cls(target_system=ts, target_component=tc, **raw["fields"])
+
+    def _raw_write(self, raw: dict[str, Any]) -> Write | None:
+        """What a stray message may do to the stored plans: a COUNT 0 or a CLEAR_ALL that
+        reaches the vehicle is a legitimate clear; a COUNT or ITEM may start or touch an
+        upload (harmless on an atomic vehicle, a possible mix on a non-atomic one)."""
+        if raw.get("to", "target") not in ("target", "broadcast"):
+            return None
+        name, fields = raw["msg"], raw["fields"]
+        raw_type = fields.get("mission_type")
+        if name == "MISSION_CLEAR_ALL":
+            types = PLAN_TYPES if raw_type == MissionType.ALL else (
+                (PLAN_TYPE_BY_VALUE[raw_type],) if raw_type in PLAN_TYPE_BY_VALUE else ())
+            return Write(types, ((),), False, True) if types else None
+        if raw_type not in PLAN_TYPE_BY_VALUE:
+            return None
+        t = PLAN_TYPE_BY_VALUE[raw_type]
+        if name == "MISSION_COUNT":
+            return Write((t,), ((),), False, fields["count"] == 0)
+        if name in ("MISSION_ITEM_INT", "MISSION_ITEM"):
+            return Write((t,), (), False, False)
+        return None
+
+    # --- liveness -------------------------------------------------------------------------
+    def _probe(self) -> Violation | None:
+        """MISSION_REQUEST_LIST from a third GCS over a clean link, retried like a GCS would;
+        a MISSION_COUNT (or any MISSION_ACK, e.g. DENIED) to it is an answer. A download it
+        opens is closed at once, so the probe leaves the vehicle as it found it."""
+        w = self.world
+        probe, target = w.probe, w.target
+        t = w.profile.timings
+        me = probe.system
+
+        def answered() -> bool:
+            return any(msg._type in ("MISSION_COUNT", "MISSION_ACK") and msg.target_system == me
+                       for msg in probe.heard)
+
+        tries = t.max_retries + 1
+        for _ in range(tries):
+            probe.listen()
+            probe.send_raw(m.request_list_message(MissionType.MISSION, target))
+            if w.run_until(answered, t.default_timeout):
+                if probe.counts.get(int(MissionType.MISSION), 0) > 0:
+                    probe.send_raw(m.ack_message(MissionResult.OPERATION_CANCELLED, MissionType.MISSION, target))
+                    w.run_until(_always, 0.0)
+                return None
+        crashed = w.crashes()
+        why = f" (it raised: {crashed[0]})" if crashed else ""
+        return self._violation("still-answers", (
+            f"the vehicle did not answer MISSION_REQUEST_LIST ({tries} tries, "
+            f"{t.default_timeout:g} s each){why}"))
+
+    def _violation(self, invariant: str, detail: str) -> Violation:
+        return Violation(invariant, detail, self.index if self.index >= 0 else None)
+
+
+# --- helpers ---------------------------------------------------------------------------------
+
+WIRE_FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z",
+               "current", "autocontinue")
+
+
+def wire_to_items(wire: list[dict[str, Any]], t: MissionType
+                  ) -> tuple[list[MissionItem], dict[int, dict[str, int]]]:
+    """Wire items -> the `MissionItem`s the client uploads, and the fields to rewrite on the
+    way out (a "seq" or "mission_type" that differs from the transfer's)."""
+    items, rewrite = [], {}
+    for seq, d in enumerate(wire):
+        items.append(MissionItem(seq, int(d["frame"]), int(d["command"]), float(d["param1"]),
+                                 float(d["param2"]), float(d["param3"]), float(d["param4"]),
+                                 int(d["x"]), int(d["y"]), float(d["z"]), int(d["current"]),
+                                 int(d["autocontinue"]), t))
+        over = {k: int(d[k]) for k in ("seq", "mission_type") if k in d}
+        if over:
+            rewrite[seq] = over
+    return items, rewrite
+
+
+def float_variant(plan: Plan) -> Plan | None:
+    """The plan as a vehicle stores it when the items came as MISSION_ITEM (float x/y);
+    None if some item's x/y cannot survive that trip."""
+    out = []
+    for it in plan:
+        x, y = MissionItem.int_xy_from_float(it.frame, *it.float_xy())
+        if x is None or y is None:
+            return None
+        out.append(MissionItem(it.seq, it.frame, it.command, it.param1, it.param2, it.param3,
+                               it.param4, x, y, it.z, it.current, it.autocontinue, it.mission_type))
+    return tuple(out)
+
+
+def describe_op(op: dict[str, Any]) -> str:
+    kind = op.get("op")
+    label = _type_label(op.get("type"))
+    if kind == "upload":
+        return f"an upload of {len(op['items'])} {label} items" + (" (float)" if op.get("float") else "")
+    if kind == "download":
+        return f"a download of the {label} plan"
+    if kind == "clear":
+        return f"a clear of the {label} plan" + ("s" if op.get("type") == MissionType.ALL else "")
+    if kind == "set_current":
+        how = "MAV_CMD_DO_SET_MISSION_CURRENT" if op.get("command") else "MISSION_SET_CURRENT"
+        return f"a set-current to {op.get('seq')} ({how})"
+    return str(kind)
+
+
+def _type_label(value: Any) -> str:
+    if value == MissionType.ALL:
+        return "all"
+    t = PLAN_TYPE_BY_VALUE.get(value)
+    return t.label if t is not None else str(value)
+
+
+def _always() -> bool:
+    return True

@@ -1,0 +1,93 @@
+"""The atomicity oracle: which stored plans the vehicle may hold, given what it answered.
+
+For each plan type we keep the set of plans the vehicle may be storing now. A write (an
+upload, a clear, a stray MISSION_COUNT 0 or MISSION_CLEAR_ALL) that the vehicle confirmed
+replaces the set; one whose outcome is unknown (the two-generals case: the last item went
+out, the ACK never came back) adds its plan to it; one that definitely failed leaves it
+alone. Writes that overlap in time (a second GCS, a stray message mid-transfer) may have
+landed in any order, so a group of them is folded in at once. Whenever the vehicle's
+plan is observed (in-process: read; over the wire: downloaded), it must be one of the set,
+and the set shrinks to it.
+
+A non-atomic vehicle (ArduPilot-like, VARIANTS A2) may hold any mix of old and new after
+an upload that did not complete: there the set becomes "unknown" (None) until the next
+confirmed write or observation, and only confirmed outcomes are judged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
+
+Plan = tuple[MissionItem, ...]
+
+
+@dataclass(frozen=True)
+class Write:
+    """One attempt to change the stored plans of `types` to one of `plans` (variants of
+    the same plan, e.g. as sent with int and with float x/y)."""
+
+    types: tuple[MissionType, ...]
+    plans: tuple[Plan, ...]
+    confirmed: bool        # the vehicle said it is done (ACCEPTED)
+    maybe: bool            # not confirmed, and it may have been applied
+
+
+class Versions:
+    def __init__(self, initial: dict[MissionType, Plan | None], *, atomic: bool = True) -> None:
+        self.atomic = atomic
+        self.possible: dict[MissionType, list[Plan] | None] = {
+            t: (None if initial.get(t) is None else [initial[t]]) for t in PLAN_TYPES}
+
+    def allows(self, t: MissionType, plan: Sequence[MissionItem]) -> bool:
+        known = self.possible[t]
+        return known is None or tuple(plan) in known
+
+    def observe(self, t: MissionType, plan: Sequence[MissionItem]) -> None:
+        """The vehicle holds `plan` now (call `allows` first to judge it)."""
+        self.possible[t] = [tuple(plan)]
+
+    def apply(self, writes: Iterable[Write]) -> None:
+        """Fold in a group of writes that may have been applied in any order."""
+        by_type: dict[MissionType, list[Write]] = {}
+        for w in writes:
+            for t in w.types:
+                by_type.setdefault(t, []).append(w)
+        for t, group in by_type.items():
+            confirmed = [p for w in group if w.confirmed for p in w.plans]
+            maybe = [p for w in group if w.maybe for p in w.plans]
+            incomplete = any(not w.confirmed for w in group)
+            if not self.atomic and incomplete:
+                # an unfinished upload may have left a mix; a confirmed one in the same
+                # group may have landed before it
+                self.possible[t] = None
+                continue
+            if confirmed:
+                self.possible[t] = _unique(confirmed + maybe)
+            elif maybe and self.possible[t] is not None:
+                self.possible[t] = _unique(self.possible[t] + maybe)
+
+    def describe(self, t: MissionType) -> str:
+        known = self.possible[t]
+        if known is None:
+            return "any plan"
+        return " or ".join(f"{len(p)} items" + (f" (id {_digest(p)})" if p else "") for p in known)
+
+
+def describe_plan(plan: Sequence[MissionItem]) -> str:
+    return f"{len(plan)} items" + (f" (id {_digest(tuple(plan))})" if plan else "")
+
+
+def _digest(plan: Plan) -> str:
+    from reference_impl.mission.store import plan_digest
+    return f"0x{plan_digest(plan):08x}"
+
+
+def _unique(plans: list[Plan]) -> list[Plan]:
+    out: list[Plan] = []
+    for p in plans:
+        if p not in out:
+            out.append(p)
+    return out

@@ -1,0 +1,94 @@
+"""Fuzz campaigns as pytest tests, so pytest-xdist spreads them over cores:
+
+    pytest --pyargs fuzz -n auto --fuzz-target builtin:spec --fuzz-shards 8 --fuzz-examples 500
+
+Registered as a pytest11 entry point; it only adds options until `--fuzz-target` is given.
+Each test is one shard of a campaign: a mode and a shard number, whose seed is derived from
+`--fuzz-seed` and the shard, so shards explore different examples and the whole fleet is
+reproducible. All shards share one Hypothesis example database (`--fuzz-database`, a
+directory by default; Hypothesis's directory database is safe for concurrent processes), so
+an example one worker found is tried first by every later run. For machines that do not
+share a disk, `--fuzz-database redis://HOST:PORT` shares it through Redis.
+A shard with a finding fails, naming the broken invariant and the saved case to replay.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    g = parser.getgroup("mavconform-fuzz", "MAVLink mission fuzz campaigns (mavconform)")
+    g.addoption("--fuzz-target", metavar="URI", help="fuzz URI (builtin:spec, mutant:NAME, udp:..., udpin:...)")
+    g.addoption("--fuzz-mode", default="protocol,frames", metavar="MODES",
+                help="comma-separated modes (default protocol,frames)")
+    g.addoption("--fuzz-shards", type=int, default=2, metavar="N", help="shards per mode (default 2)")
+    g.addoption("--fuzz-examples", type=int, default=100, metavar="N", help="examples per shard (default 100)")
+    g.addoption("--fuzz-time", metavar="DURATION", help="wall-time budget per shard, e.g. 5m")
+    g.addoption("--fuzz-seed", type=int, default=0, help="fleet seed (default 0)")
+    g.addoption("--fuzz-findings", default="fuzz-findings", metavar="DIR", help="where findings are saved")
+    g.addoption("--fuzz-database", default=".hypothesis/fuzz", metavar="DIR|none|redis://HOST:PORT",
+                help="shared Hypothesis example database (default .hypothesis/fuzz)")
+
+
+def _settings(config: pytest.Config) -> dict[str, Any]:
+    from fuzz.campaign import MODES, parse_duration
+    from reference_impl.errors import UsageError
+
+    modes = [m.strip() for m in config.getoption("--fuzz-mode").split(",") if m.strip()]
+    bad = [m for m in modes if m not in MODES]
+    if bad or not modes:
+        raise pytest.UsageError(f"--fuzz-mode: unknown mode(s) {', '.join(bad) or '(none)'} "
+                                f"(expected {', '.join(MODES)})")
+    shards, examples = config.getoption("--fuzz-shards"), config.getoption("--fuzz-examples")
+    if shards < 1 or examples < 1:
+        raise pytest.UsageError("--fuzz-shards and --fuzz-examples must be at least 1")
+    time_text = config.getoption("--fuzz-time")
+    try:
+        from conformance.target_uri import parse_target
+        parse_target(config.getoption("--fuzz-target"))
+        time_s = parse_duration(time_text) if time_text else None
+    except UsageError as exc:
+        raise pytest.UsageError(str(exc)) from None
+    return {"modes": modes, "shards": shards, "examples": examples, "time_s": time_s}
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("--fuzz-target", default=None):
+        _settings(config)   # a mistake is a usage error before anything runs
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    if "fuzz_shard" not in metafunc.fixturenames:
+        return
+    if not metafunc.config.getoption("--fuzz-target"):
+        metafunc.parametrize("fuzz_shard", [pytest.param(None, marks=pytest.mark.skip(
+            reason="no --fuzz-target given"))], ids=["no-target"])
+        return
+    s = _settings(metafunc.config)
+    shards = [(mode, i) for mode in s["modes"] for i in range(s["shards"])]
+    metafunc.parametrize("fuzz_shard", shards, ids=[f"{m}-{i}" for m, i in shards])
+
+
+def run_shard(config: pytest.Config, mode: str, shard: int) -> None:
+    from fuzz.campaign import CampaignOptions, run_campaign
+    from fuzz.report import replay_command
+    from mavconform.fuzz_cmd import open_database
+    from reference_impl.errors import UsageError
+    from reference_impl.net.sim import stable_seed
+
+    s = _settings(config)
+    seed = stable_seed(config.getoption("--fuzz-seed"), mode, shard) & 0x7FFFFFFF
+    try:
+        options = CampaignOptions(
+            target=config.getoption("--fuzz-target"), mode=mode, seed=seed,
+            examples=s["examples"], time_s=s["time_s"], findings_dir=config.getoption("--fuzz-findings"),
+            database=open_database(config.getoption("--fuzz-database")))
+        result = run_campaign(options)
+    except UsageError as exc:
+        raise pytest.UsageError(str(exc)) from None
+    if result.findings:
+        pytest.fail("\n".join(f"{f.case.violation}\n  replay: {replay_command(f)}"
+                              for f in result.findings), pytrace=False)

@@ -1,0 +1,93 @@
+"""A campaign as a run document ("mavconform-run/1"), so every report writer shows it.
+
+Each invariant the mode checks is one row, like a clause: `FUZZ.PROTOCOL.atomic-upload`
+passes if no example broke it and fails with the finding's detail, the replay command and
+the replayed exchange (drawn as a sequence diagram in the HTML report) if one did. The
+document also carries a `fuzz` block: the campaign's counters and every saved case.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from mavconform import __version__
+
+from .campaign import CampaignResult, Finding
+
+FORMAT = "mavconform-run/1"
+
+
+def row_id(mode: str, invariant: str) -> str:
+    return f"FUZZ.{mode.upper()}.{invariant}"
+
+
+def campaign_document(result: CampaignResult) -> dict[str, Any]:
+    opts = result.options
+    by_invariant: dict[str, list[Finding]] = {}
+    for finding in result.findings:
+        name = finding.case.violation.invariant if finding.case.violation else "unknown"
+        by_invariant.setdefault(name, []).append(finding)
+    names = list(result.invariants) + sorted(set(by_invariant) - set(result.invariants))
+    rows = [_row(opts.mode, name, result.invariants.get(name, name), by_invariant.get(name, []))
+            for name in names]
+    failing = sum(1 for r in rows if r["gating"])
+    counts = {o: sum(1 for r in rows if r["outcome"] == o)
+              for o in ("pass", "fail", "known-deviation", "not-applicable", "skipped", "error")}
+    run: dict[str, Any] = {
+        "target": opts.target, "started": result.started.strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "duration_s": round(result.duration_s, 3), "seed": opts.seed, "mode": opts.mode,
+        "examples": result.examples, "units": result.units,
+        "budget": (f"{opts.examples} examples" if opts.examples is not None else "")
+        + (" / " if opts.examples is not None and opts.time_s is not None else "")
+        + (f"{opts.time_s:g} s" if opts.time_s is not None else ""),
+    }
+    first_capture = next((f.capture for f in result.findings if f.capture is not None), None)
+    return {
+        "format": FORMAT,
+        "tool": {"name": "mavconform", "version": __version__},
+        "run": run,
+        "identity": None,
+        "summary": {"total": len(rows), **counts, "gating_failures": failing,
+                    "verdict": "fail" if failing else "pass"},
+        "gating": {"mode": "default", "regressions": [], "fixed": []},
+        "restore": {"status": "skipped",
+                    "detail": "a fuzz campaign does not put back the target's plans"},
+        "capture": str(first_capture) if first_capture is not None else None,
+        "clauses": rows,
+        "fuzz": {"mode": opts.mode, "examples": result.examples, "units": result.units,
+                 "findings": [_finding(f) for f in result.findings]},
+    }
+
+
+def replay_command(finding: Finding) -> str:
+    return f"mavconform fuzz --replay {finding.path}"
+
+
+def _row(mode: str, name: str, description: str, findings: list[Finding]) -> dict[str, Any]:
+    failed = bool(findings)
+    if failed:
+        detail = " | ".join(
+            f"{f.case.violation} (saved {f.path}; replay: {replay_command(f)}"
+            + ("" if f.reproduced else "; WARNING: the replay did not reproduce it") + ")"
+            for f in findings)
+    else:
+        detail = "no example broke it"
+    return {
+        "id": row_id(mode, name), "group": f"FUZZ.{mode.upper()}", "level": "MUST",
+        "role": "vehicle", "title": description, "source": f"fuzz oracle ({mode} mode)",
+        "requirement": description, "outcome": "fail" if failed else "pass", "gating": failed,
+        "detail": detail, "expectation": None, "duration_s": 0.0,
+        "exchange": findings[0].exchange if failed else [],
+    }
+
+
+def _finding(f: Finding) -> dict[str, Any]:
+    v = f.case.violation
+    return {
+        "invariant": v.invariant if v else None, "detail": v.detail if v else "",
+        "step": v.step if v else None, "steps": len(f.case.steps), "seed": f.case.seed,
+        "case": str(f.path), "capture": str(f.capture) if f.capture else None,
+        "reproduced": f.reproduced, "replay": replay_command(f),
+        "name": Path(f.path).stem,
+    }

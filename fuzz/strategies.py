@@ -1,0 +1,360 @@
+"""Hypothesis strategies: valid plans, edge-value items, fault models and schedules, steps.
+
+Two kinds of item. `mission_item` draws a `MissionItem` the reference vehicle accepts
+(float32-exact values, so a round trip compares exactly); the tool's own tests use these.
+`wire_item` draws what a fuzzing GCS may put on the wire: a dict of raw MISSION_ITEM_INT
+field values, every field pushed to its edges (NaN, +-inf, subnormals, float32 extremes,
+int32 extremes and negatives, unknown commands and frames, `current`/`autocontinue`
+outside 0/1), and, at plan level, a `seq` or `mission_type` that is not what the transfer
+expects (gaps, repeats, seq 65535, another plan type). Dicts, because the `MissionItem`
+model is the vehicle's canonical form and a fuzz item is exactly what it refuses to be.
+
+The protocol fuzzer's steps are JSON-safe dicts (they are what a saved case replays);
+their vocabulary is documented in `fuzz/protocol/steps.py` and drawn here.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+from hypothesis import strategies as st
+
+from reference_impl.mission.constants import (
+    FENCE_COMMANDS, MISSION_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
+)
+from reference_impl.mission.items import (
+    FRAME_MISSION, GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, PLAN_TYPES, MissionItem,
+    MissionType,
+)
+from reference_impl.net import FaultModel
+
+# --- valid plans (what the reference vehicle accepts) ------------------------------------
+
+f32 = st.floats(width=32, allow_nan=False, allow_infinity=False)
+lat = st.integers(-900_000_000, 900_000_000)
+lon = st.integers(-1_800_000_000, 1_800_000_000)
+alt = st.floats(-500, 10_000, width=32)
+GLOBAL = st.sampled_from([0, 3, 5, 6, 10, 11])
+
+
+@st.composite
+def mission_item(draw, mission_type: MissionType) -> MissionItem:
+    """An item of `mission_type` the spec vehicle accepts (seq 0: the upload renumbers)."""
+    if mission_type is MissionType.FENCE:
+        command = draw(st.sampled_from([Cmd.NAV_FENCE_RETURN_POINT, Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION,
+                                        Cmd.NAV_FENCE_CIRCLE_EXCLUSION]))
+        p1 = {Cmd.NAV_FENCE_RETURN_POINT: 0.0, Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION: float(draw(st.integers(3, 20))),
+              Cmd.NAV_FENCE_CIRCLE_EXCLUSION: draw(st.floats(1, 5000, width=32))}[command]
+        return MissionItem(0, draw(GLOBAL), int(command), param1=p1, x=draw(lat), y=draw(lon), z=draw(alt),
+                           mission_type=mission_type)
+    if mission_type is MissionType.RALLY:
+        return MissionItem(0, draw(GLOBAL), int(Cmd.NAV_RALLY_POINT), x=draw(lat), y=draw(lon), z=draw(alt),
+                           mission_type=mission_type)
+    command = draw(st.sampled_from([Cmd.NAV_WAYPOINT, Cmd.NAV_LOITER_TIME, Cmd.NAV_LAND, Cmd.NAV_TAKEOFF,
+                                    Cmd.DO_CHANGE_SPEED, Cmd.CONDITION_DELAY]))
+    positional = command in (Cmd.NAV_WAYPOINT, Cmd.NAV_LOITER_TIME, Cmd.NAV_LAND, Cmd.NAV_TAKEOFF)
+    p1 = draw(st.floats(0, 600, width=32)) if command == Cmd.NAV_WAYPOINT else draw(f32)
+    return MissionItem(
+        0, draw(GLOBAL) if positional else 2, int(command),
+        param1=p1, param2=draw(f32), param3=draw(f32),
+        param4=draw(st.one_of(f32, st.just(float("nan")))),
+        x=draw(lat), y=draw(lon), z=draw(alt) if positional else draw(f32),
+        current=0, autocontinue=draw(st.sampled_from([0, 1])), mission_type=mission_type)
+
+
+def plan_items(mission_type: MissionType, max_size: int = 20) -> st.SearchStrategy[list[MissionItem]]:
+    return st.lists(mission_item(mission_type), min_size=0, max_size=max_size)
+
+
+partition = st.tuples(st.floats(0, 30), st.floats(0.5, 12)).map(lambda p: (p[0], p[0] + p[1]))
+
+
+@st.composite
+def fault_models(draw, max_loss: float = 0.3) -> FaultModel:
+    """Loss, duplication, reordering, delay and jitter, and sometimes a partition in time."""
+    return FaultModel(
+        partitions=tuple(sorted(draw(st.lists(partition, max_size=2)))),
+        loss=draw(st.floats(0, max_loss)),
+        duplicate=draw(st.floats(0, 0.2)),
+        reorder=draw(st.floats(0, 0.2)),
+        reorder_delay=draw(st.floats(0.0, 0.1)),
+        delay=draw(st.floats(0, 0.05)),
+        jitter=draw(st.floats(0, 0.05)),
+    )
+
+
+# --- edge values --------------------------------------------------------------------------
+
+def _f32(bits: int) -> float:
+    return struct.unpack("<f", struct.pack("<I", bits))[0]
+
+
+FLT_MAX = _f32(0x7F7FFFFF)
+FLT_MIN_NORMAL = _f32(0x00800000)
+FLT_SUBNORMAL_MIN = _f32(0x00000001)
+FLT_SUBNORMAL_MAX = _f32(0x007FFFFF)
+F32_EDGES = (float("nan"), float("inf"), float("-inf"), 0.0, -0.0, 1.0, -1.0, FLT_MAX, -FLT_MAX,
+             FLT_MIN_NORMAL, FLT_SUBNORMAL_MIN, -FLT_SUBNORMAL_MIN, FLT_SUBNORMAL_MAX, _f32(0x7FC00001))
+
+subnormal_f32 = st.floats(-FLT_MIN_NORMAL, FLT_MIN_NORMAL, width=32, exclude_min=True,
+                          exclude_max=True).filter(lambda v: v != 0.0)
+# Every float32 a field can carry, biased to the values that break parsers and validators.
+edge_f32 = st.one_of(st.sampled_from(F32_EDGES), subnormal_f32, st.floats(width=32))
+
+
+def edge_ints(lo: int, hi: int, *extra: int) -> st.SearchStrategy[int]:
+    """Integers in [lo, hi], biased to both ends, -1/0/1 and the given values."""
+    marks = sorted({v for v in (lo, lo + 1, -1, 0, 1, hi - 1, hi, *extra) if lo <= v <= hi})
+    return st.one_of(st.sampled_from(marks), st.integers(lo, hi))
+
+
+edge_u8 = edge_ints(0, 255, 2, 127, 128)
+edge_u16 = edge_ints(0, 65535, 255, 256, 32767, 32768)
+edge_u32 = edge_ints(0, 2**32 - 1, 2**31)
+# x/y: int32 extremes and the first values past +-90 / +-180 degrees in degE7.
+edge_i32 = edge_ints(INT32_MIN, INT32_MAX, 900_000_000, 900_000_001, -900_000_001,
+                     1_800_000_000, 1_800_000_001, -1_800_000_001)
+
+KNOWN_COMMANDS = frozenset(int(c) for c in (*MISSION_COMMANDS, *FENCE_COMMANDS, *RALLY_COMMANDS))
+_COMMANDS_BY_TYPE = {MissionType.MISSION: MISSION_COMMANDS, MissionType.FENCE: FENCE_COMMANDS,
+                     MissionType.RALLY: RALLY_COMMANDS}
+unknown_command = edge_u16.filter(lambda c: c not in KNOWN_COMMANDS)
+
+
+def commands(mission_type: MissionType) -> st.SearchStrategy[int]:
+    """Commands of the plan type, of another plan type, and unknown ones."""
+    own = sorted(int(c) for c in _COMMANDS_BY_TYPE[mission_type])
+    other = sorted(KNOWN_COMMANDS - set(own))
+    return st.one_of(st.sampled_from(own), st.sampled_from(other), unknown_command)
+
+
+frames = st.one_of(st.sampled_from(sorted(GLOBAL_FRAMES | {FRAME_MISSION})),
+                   st.sampled_from(sorted(LOCAL_FRAMES)), edge_u8)
+
+ITEM_FIELDS = ("frame", "command", "current", "autocontinue", "param1", "param2", "param3",
+               "param4", "x", "y", "z")
+_EDGE_FIELD = {
+    "frame": frames, "current": edge_u8, "autocontinue": edge_u8,
+    "param1": edge_f32, "param2": edge_f32, "param3": edge_f32, "param4": edge_f32,
+    "x": edge_i32, "y": edge_i32, "z": edge_f32,
+}
+
+
+def item_fields(item: MissionItem) -> dict[str, Any]:
+    """The wire fields of a valid item (seq and mission_type are the transfer's)."""
+    return {name: getattr(item, name) for name in ITEM_FIELDS}
+
+
+def valid_wire_item(mission_type: MissionType) -> st.SearchStrategy[dict[str, Any]]:
+    return mission_item(mission_type).map(item_fields)
+
+
+@st.composite
+def edge_wire_item(draw, mission_type: MissionType) -> dict[str, Any]:
+    """A valid item with one to three fields replaced by edge values."""
+    fields = item_fields(draw(mission_item(mission_type)))
+    names = draw(st.lists(st.sampled_from(ITEM_FIELDS), min_size=1, max_size=3, unique=True))
+    for name in names:
+        fields[name] = draw(commands(mission_type) if name == "command" else _EDGE_FIELD[name])
+    return fields
+
+
+def wire_item(mission_type: MissionType) -> st.SearchStrategy[dict[str, Any]]:
+    """Either a valid item or an edge one, as raw MISSION_ITEM_INT fields."""
+    return st.one_of(valid_wire_item(mission_type), edge_wire_item(mission_type))
+
+
+SEQ_FAULTS = ("gap", "repeat", "far", "other-type")
+
+
+@st.composite
+def wire_plan(draw, mission_type: MissionType, max_size: int = 20, *,
+              edges: bool = True, min_size: int = 0) -> list[dict[str, Any]]:
+    """A plan as wire items: valid ones, and (in about one plan in three, fewer as it
+    shrinks) edge items spliced in or one item whose `seq` or `mission_type` is wrong on the
+    wire. An item's "seq" or "mission_type" key, when present, is what goes out instead of
+    the transfer's own. `edges=False`: only items the spec vehicle accepts."""
+    items = draw(st.lists(valid_wire_item(mission_type), min_size=min_size, max_size=max_size))
+    if not items or not edges:
+        return items
+    last = len(items) - 1
+    if draw(st.integers(0, 4)) >= 3:
+        for index, edge in draw(st.lists(st.tuples(st.integers(0, last), edge_wire_item(mission_type)),
+                                         min_size=1, max_size=2)):
+            items[index] = edge
+    if draw(st.integers(0, 7)) == 7:
+        index, fault = draw(st.integers(0, last)), draw(st.sampled_from(SEQ_FAULTS))
+        item = items[index] = dict(items[index])
+        if fault == "gap":
+            item["seq"] = index + draw(st.integers(1, 3))
+        elif fault == "repeat":
+            item["seq"] = index - 1 if index else 1
+        elif fault == "far":
+            item["seq"] = draw(st.sampled_from([65535, 32768, len(items)]))
+        else:
+            item["mission_type"] = draw(st.sampled_from(
+                [int(t) for t in PLAN_TYPES if t is not mission_type] + [3, 254, 255]))
+    return items
+
+
+# --- fault schedules (JSON-safe; fuzz/protocol/faults.py turns them into FaultModels) -----
+
+MISSION_MESSAGES = ("MISSION_ACK", "MISSION_COUNT", "MISSION_REQUEST_INT", "MISSION_REQUEST",
+                    "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_REQUEST_LIST",
+                    "MISSION_CLEAR_ALL", "MISSION_CURRENT", "MISSION_SET_CURRENT")
+_prob = st.floats(0, 1).map(lambda p: round(p, 3))
+
+
+@st.composite
+def fault_schedules(draw, max_loss: float = 0.3) -> dict[str, Any]:
+    """One direction's faults: random loss, duplication, reordering, delay, jitter and
+    corruption; bursts (short total outages, `[start, length]` seconds after the schedule
+    is set); scripted drops ("the 2nd MISSION_ACK", "MISSION_ITEM_INT from the 3rd on");
+    and a cut: from the nth message called NAME on, the next `span` messages are all lost
+    (a partition that begins at a chosen message). Keys at their zero value are left out."""
+    spec = {
+        "loss": round(draw(st.floats(0, max_loss)), 3),
+        "duplicate": round(draw(st.floats(0, 0.2)), 3),
+        "reorder": round(draw(st.floats(0, 0.2)), 3),
+        "reorder_delay": round(draw(st.floats(0, 0.2)), 3),
+        "delay": round(draw(st.floats(0, 0.05)), 3),
+        "jitter": round(draw(st.floats(0, 0.05)), 3),
+        "corrupt": round(draw(st.floats(0, 0.05)), 3),
+        "bursts": [[round(s, 2), round(n, 2)] for s, n in draw(st.lists(
+            st.tuples(st.floats(0, 20), st.floats(0.05, 30)), max_size=2))],
+        "drops": draw(st.lists(st.fixed_dictionaries({
+            "name": st.sampled_from(MISSION_MESSAGES), "nth": st.integers(1, 6),
+            "onwards": st.booleans()}), max_size=2)),
+        "cut": draw(st.one_of(st.none(), st.fixed_dictionaries({
+            "name": st.sampled_from(MISSION_MESSAGES), "nth": st.integers(1, 6),
+            "span": st.integers(1, 40)}))),
+    }
+    return {k: v for k, v in spec.items() if v}
+
+
+# --- protocol steps -------------------------------------------------------------------------
+
+plan_type = st.sampled_from([int(t) for t in PLAN_TYPES])
+clear_type = st.sampled_from([int(t) for t in PLAN_TYPES] + [int(MissionType.ALL)])
+
+
+@st.composite
+def upload_op(draw, max_items: int = 20, *, edges: bool = True, min_items: int = 0) -> dict[str, Any]:
+    t = draw(plan_type)
+    op = {"op": "upload", "type": t,
+          "items": draw(wire_plan(MissionType(t), max_items, edges=edges, min_size=min_items))}
+    if draw(st.integers(0, 7)) == 7:
+        op["float"] = True   # answer with MISSION_ITEM (float x/y) even when asked for _INT
+    return op
+
+
+def download_op() -> st.SearchStrategy[dict[str, Any]]:
+    return st.fixed_dictionaries({"op": st.just("download"), "type": plan_type})
+
+
+def clear_op() -> st.SearchStrategy[dict[str, Any]]:
+    return st.fixed_dictionaries({"op": st.just("clear"), "type": clear_type})
+
+
+def set_current_op() -> st.SearchStrategy[dict[str, Any]]:
+    return st.fixed_dictionaries({"op": st.just("set_current"),
+                                  "seq": st.one_of(st.integers(0, 60), edge_u16),
+                                  "command": st.booleans()})
+
+
+def operations(max_items: int = 20) -> st.SearchStrategy[dict[str, Any]]:
+    """One GCS operation, of any kind and plan type."""
+    return st.one_of(upload_op(max_items), download_op(), clear_op(), set_current_op())
+
+
+def seconds(max_s: float) -> st.SearchStrategy[float]:
+    return st.floats(0, max_s).map(lambda s: round(s, 3))
+
+
+def cancel_step(max_items: int = 20, max_after: float = 4.0) -> st.SearchStrategy[dict[str, Any]]:
+    """Start an operation and cancel it `after` seconds in (if it is still running)."""
+    return st.fixed_dictionaries({"op": st.just("cancel"), "of": operations(max_items),
+                                  "after": seconds(max_after)})
+
+
+def second_gcs_step(max_items: int = 20, max_after: float = 4.0) -> st.SearchStrategy[dict[str, Any]]:
+    """GCS A starts `first`; `after` seconds later GCS B (another system id) starts `second`."""
+    return st.fixed_dictionaries({"op": st.just("second_gcs"), "first": operations(max_items),
+                                  "second": operations(max_items), "after": seconds(max_after)})
+
+
+TARGETS = ("target", "broadcast", "other-system", "other-component")
+_any_type = st.one_of(plan_type, st.sampled_from([255, 3, 254]), edge_u8)
+
+
+@st.composite
+def raw_message(draw) -> dict[str, Any]:
+    """A message a GCS sends out of context: ACK/ITEM/REQUEST nobody asked for, a COUNT of
+    65535, a wrong mission_type, a seq beyond the count, or the right message addressed to
+    someone else. `to` names the addressee (resolved against the target's ids), `from` the
+    GCS that sends it ("a", whose operations run; "b"; or "mute", which never answers)."""
+    name = draw(st.sampled_from([
+        "MISSION_ACK", "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_REQUEST_INT", "MISSION_REQUEST",
+        "MISSION_COUNT", "MISSION_REQUEST_LIST", "MISSION_CLEAR_ALL", "MISSION_SET_CURRENT",
+        "COMMAND_LONG"]))
+    if name == "MISSION_ACK":
+        fields = {"type": draw(st.one_of(st.sampled_from([int(r) for r in MissionResult]), edge_u8)),
+                  "mission_type": draw(_any_type), "opaque_id": draw(edge_u32)}
+    elif name in ("MISSION_ITEM_INT", "MISSION_ITEM"):
+        t = draw(st.sampled_from(PLAN_TYPES))
+        fields = dict(draw(wire_item(t)), seq=draw(st.one_of(st.integers(0, 60), edge_u16)),
+                      mission_type=draw(st.one_of(st.just(int(t)), _any_type)))
+        if name == "MISSION_ITEM":   # float x/y: anything a float32 holds
+            fields["x"], fields["y"] = draw(edge_f32), draw(edge_f32)
+    elif name in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
+        fields = {"seq": draw(st.one_of(st.integers(0, 60), edge_u16)), "mission_type": draw(_any_type)}
+    elif name == "MISSION_COUNT":
+        fields = {"count": draw(st.one_of(st.sampled_from([65535, 0, 1, 1001, 257, 65]), edge_u16)),
+                  "mission_type": draw(_any_type), "opaque_id": draw(edge_u32)}
+    elif name in ("MISSION_REQUEST_LIST", "MISSION_CLEAR_ALL"):
+        fields = {"mission_type": draw(_any_type)}
+    elif name == "MISSION_SET_CURRENT":
+        fields = {"seq": draw(st.one_of(st.integers(0, 60), edge_u16))}
+    else:   # MAV_CMD_DO_SET_MISSION_CURRENT with any param1
+        fields = {"command": int(Cmd.DO_SET_MISSION_CURRENT), "confirmation": 0,
+                  "param1": draw(edge_f32), "param2": draw(st.sampled_from([0.0, 1.0])),
+                  "param3": 0.0, "param4": 0.0, "param5": 0.0, "param6": 0.0, "param7": 0.0}
+    return {"msg": name, "fields": fields, "to": draw(st.sampled_from(TARGETS)),
+            "from": draw(st.sampled_from(["a", "b", "mute"]))}
+
+
+def stray_step(max_items: int = 20, max_after: float = 4.0) -> st.SearchStrategy[dict[str, Any]]:
+    """Stray messages, sent between operations or `after` seconds into one (`during`)."""
+    return st.fixed_dictionaries({
+        "op": st.just("stray"), "messages": st.lists(raw_message(), min_size=1, max_size=3),
+        "during": st.one_of(st.none(), operations(max_items)), "after": seconds(max_after)})
+
+
+def faults_step(max_loss: float = 0.3) -> st.SearchStrategy[dict[str, Any]]:
+    """New faults on GCS A's link: `up` (A -> vehicle) and `down`; null is a clean direction."""
+    direction = st.one_of(st.none(), fault_schedules(max_loss))
+    return st.fixed_dictionaries({"op": st.just("faults"), "up": direction, "down": direction})
+
+
+def wait_step(max_seconds: float = 20.0) -> st.SearchStrategy[dict[str, Any]]:
+    """Let time pass (partitions end, abandoned transfers time out)."""
+    return st.fixed_dictionaries({"op": st.just("wait"), "seconds": seconds(max_seconds)})
+
+
+def protocol_steps(max_items: int = 20, *, faults: bool = True,
+                   max_wait: float = 20.0) -> st.SearchStrategy[dict[str, Any]]:
+    """Any one step of the protocol fuzzer."""
+    after = min(4.0, max_wait)
+    kinds = [operations(max_items), cancel_step(max_items, after), second_gcs_step(max_items, after),
+             stray_step(max_items, after), wait_step(max_wait)]
+    if faults:
+        kinds.append(faults_step())
+    return st.one_of(*kinds)
+
+
+def operation_sequences(max_items: int = 20, max_steps: int = 10, *, faults: bool = True,
+                        max_wait: float = 20.0) -> st.SearchStrategy[list[dict[str, Any]]]:
+    """A whole program for the protocol fuzzer: a list of steps `replay` can run."""
+    return st.lists(protocol_steps(max_items, faults=faults, max_wait=max_wait),
+                    min_size=1, max_size=max_steps)

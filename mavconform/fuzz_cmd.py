@@ -1,0 +1,216 @@
+"""`mavconform fuzz`: a fuzz campaign against a target, or the replay of one saved case."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from fuzz.campaign import MODES, CampaignOptions, Progress, load_mode, parse_duration, replay_recorded, run_campaign
+from fuzz.case import load_case
+from reference_impl.errors import UsageError
+
+DESCRIPTION = """\
+Fuzz a mission implementation and save what breaks it.
+
+  protocol  a Hypothesis state machine plays GCS operations (upload, download, clear,
+            set-current of every plan type, cancels, a second GCS, stray and malformed
+            messages, edge-value items) and link faults against the target, and checks
+            invariants after every step: atomic uploads, exactly one result per operation,
+            both ends back to idle, retries within limits, download == last accepted upload,
+            the vehicle still answers.
+  frames    byte-level mutations of valid mission frames and garbage (bad CRC, bad length,
+            truncation, bad magic, unknown ids, v1/v2 mixing, incompat flags, wrong-key and
+            stale signatures, bytes between frames); the target must keep sending HEARTBEAT,
+            still serve a normal download, and (in-process) neither raise nor change its plans.
+
+In-process targets (builtin:, mutant:) run in virtual time: fast, and every case replays
+exactly. Each finding is shrunk and saved as FINDINGS/NAME.json (the case: seed and steps)
+with NAME.mcap (the capture of its replay); `mavconform fuzz --replay FINDINGS/NAME.json`
+runs it again. The campaign also writes fuzz.json / .junit.xml / .md / .html to --report-dir,
+one row per invariant.
+
+Exit codes: 0 no finding; 1 a finding (or, with --replay, the case still fails); 2 usage.
+"""
+
+EPILOG = """\
+examples:
+  mavconform fuzz --target builtin:spec --mode protocol --examples 200 --seed 1
+  mavconform fuzz --target builtin:spec --mode frames --time 60s
+  mavconform fuzz --target mutant:non-atomic-upload --examples 100     # a planted bug: found
+  mavconform fuzz --target udpin:14550 --mode frames --time 5m          # a SITL that sends to us
+  mavconform fuzz --replay fuzz-findings/protocol-atomic-upload-1a2b3c4d5e.json
+across cores and machines: pytest --pyargs fuzz -n auto --fuzz-target builtin:spec (README)
+"""
+
+DEFAULT_EXAMPLES = 100
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("fuzz", help="fuzz a target (protocol or frames) and save shrunk, replayable findings",
+                       description=DESCRIPTION, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--target", default="builtin:spec", metavar="URI",
+                   help="builtin:spec|px4|ardupilot, mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT "
+                        "(default builtin:spec)")
+    p.add_argument("--mode", choices=MODES, default="protocol", help="what to fuzz (default protocol)")
+    p.add_argument("--examples", type=_count, metavar="N",
+                   help=f"stop after N examples (default {DEFAULT_EXAMPLES} unless --time is given)")
+    p.add_argument("--time", type=_duration, metavar="DURATION",
+                   help="stop after this wall time, e.g. 60s, 5m, 1h (with --examples: whichever comes first)")
+    p.add_argument("--seed", type=int, default=0, help="campaign seed: the same seed runs the same examples (default 0)")
+    p.add_argument("--findings", default="fuzz-findings", metavar="DIR",
+                   help="where shrunk findings are saved (default fuzz-findings)")
+    p.add_argument("--report-dir", default="reports/fuzz", metavar="DIR",
+                   help="where fuzz.json/.junit.xml/.md/.html go (default reports/fuzz)")
+    p.add_argument("--database", default=".hypothesis/fuzz", metavar="DIR|none|redis://HOST:PORT",
+                   help="Hypothesis example database shared by campaigns: a directory (default "
+                        ".hypothesis/fuzz), 'none', or a Redis server for a fleet (needs hypothesis[redis])")
+    p.add_argument("--replay", metavar="CASE.json",
+                   help="run one saved case again (target and mode come from the case)")
+    p.add_argument("--capture", metavar="FILE.mcap", help="with --replay: record the replay to this MCAP file")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress line; only the summary")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.replay:
+        return _replay(args)
+    if args.capture:
+        raise UsageError("--capture goes with --replay (a campaign saves each finding's capture itself)")
+    from fuzz.report import campaign_document, replay_command
+    from reports.write import write_reports
+
+    examples = args.examples if args.examples is not None or args.time is not None else DEFAULT_EXAMPLES
+    options = CampaignOptions(target=args.target, mode=args.mode, seed=args.seed, examples=examples,
+                              time_s=args.time, findings_dir=args.findings,
+                              database=open_database(args.database))
+    budget = " and ".join(x for x in (f"{examples} examples" if examples is not None else "",
+                                      f"{args.time:g} s" if args.time is not None else "") if x)
+    print(f"mavconform fuzz: {args.mode} mode against {args.target}, seed {args.seed}, "
+          f"budget {budget}", flush=True)
+    unit = "steps" if args.mode == "protocol" else "frames"
+    bar = None if args.quiet else ProgressLine(unit, sys.stderr)
+    try:
+        result = run_campaign(options, bar)
+    finally:
+        if bar is not None:
+            bar.done()
+    doc = campaign_document(result)
+    paths = write_reports(doc, args.report_dir, basename="fuzz")
+    rate = result.examples / result.duration_s if result.duration_s > 0 else 0.0
+    urate = result.units / result.duration_s if result.duration_s > 0 else 0.0
+    print(f"\n{result.examples} examples, {result.units} {unit} in {result.duration_s:.1f} s "
+          f"({rate:.1f} examples/s, {urate:.0f} {unit}/s)")
+    checked = ", ".join(result.invariants) or "(the mode's oracles)"
+    print(f"invariants checked: {checked}")
+    if not result.findings:
+        print(f"findings: none; reports in {paths['json'].parent}/")
+        return 0
+    print(f"findings: {len(result.findings)}")
+    for f in result.findings:
+        print(f"  {f.case.violation}")
+        print(f"    {len(f.case.steps)} step(s), saved {f.path} (+ {f.capture.name if f.capture else 'no capture'})"
+              + ("" if f.reproduced else "  [WARNING: its replay did not reproduce it]"))
+        print(f"    replay: {replay_command(f)}")
+    print(f"reports in {paths['json'].parent}/")
+    return 1
+
+
+def _replay(args: argparse.Namespace) -> int:
+    if args.examples is not None or args.time is not None:
+        raise UsageError("--replay runs one saved case: --examples and --time do not apply")
+    case = load_case(args.replay)
+    mode = load_mode(case.mode)
+    print(f"mavconform fuzz: replaying {args.replay} ({case.mode} mode, {len(case.steps)} step(s), "
+          f"seed {case.seed}) against {case.target}", flush=True)
+    if case.violation is not None:
+        print(f"  recorded: {case.violation}")
+    violation, _ = replay_recorded(mode, case, Path(args.capture) if args.capture else None)
+    if violation is None:
+        print("  replayed: no invariant broke (fixed, or the target differs from the one it was found on)")
+        return 0
+    same = case.violation is not None and violation.invariant == case.violation.invariant
+    print(f"  replayed: {violation}" + ("" if same or case.violation is None else "  (a different invariant)"))
+    if args.capture:
+        print(f"  capture: {args.capture}")
+    return 1
+
+
+def open_database(spec: str) -> Any:
+    """'none', a directory, or redis://HOST:PORT -> a Hypothesis ExampleDatabase (or None)."""
+    from hypothesis.database import DirectoryBasedExampleDatabase
+
+    text = spec.strip()
+    if text.lower() == "none":
+        return None
+    if text.startswith("redis://"):
+        try:
+            import redis  # type: ignore[import-not-found]
+            from hypothesis.extra.redis import RedisExampleDatabase
+        except ImportError:
+            raise UsageError(f"--database {spec}: a Redis database needs "
+                             "`pip install 'hypothesis[redis]'`") from None
+        return RedisExampleDatabase(redis.Redis.from_url(text))
+    if "://" in text:
+        raise UsageError(f"--database {spec!r}: expected a directory, 'none' or redis://HOST:PORT")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise UsageError(f"--database {spec}: exists and is not a directory")
+    return DirectoryBasedExampleDatabase(str(path))
+
+
+class ProgressLine:
+    """One status line: examples, rate, units, findings. Redrawn in place on a terminal (at
+    most 5 times a second); elsewhere (CI logs) printed every 10 s."""
+
+    def __init__(self, unit: str, stream: Any) -> None:
+        self.unit = unit
+        self.stream = stream
+        self.tty = bool(getattr(stream, "isatty", lambda: False)())
+        self.every = 0.2 if self.tty else 10.0
+        self.last = 0.0
+        self.shown = False
+
+    def __call__(self, p: Progress) -> None:
+        now = time.monotonic()
+        if now - self.last < self.every:
+            return
+        self.last = now
+        self._show(p)
+
+    def _show(self, p: Progress) -> None:
+        t = max(p.elapsed, 1e-9)
+        text = (f"{p.examples} examples ({p.examples / t:.1f}/s)  {p.units} {self.unit} "
+                f"({p.units / t:.0f}/s)  findings {p.findings}  {p.elapsed:.0f} s")
+        if self.tty:
+            self.stream.write("\r" + text.ljust(79))
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+        self.shown = True
+
+    def done(self) -> None:
+        if self.tty and self.shown:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be at least 1")
+    return value
+
+
+def _duration(text: str) -> float:
+    try:
+        return parse_duration(text)
+    except UsageError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+

@@ -1,0 +1,191 @@
+"""`mavconform proxy`: a chaos proxy between a real GCS and a real vehicle, over UDP."""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import socket
+import sys
+
+from fuzz.proxy import DOWN, MAX_LEGS, UP, ChaosProxy, UdpProxy
+from reference_impl.errors import UsageError
+from reference_impl.net import LinkStats, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
+
+from .options import add_fault_options, capture_to, describe_faults, fault_model, positive, sigterm_as_interrupt
+
+DESCRIPTION = """\
+Sit between a GCS and a vehicle as a bad radio link. The GCS sends to --listen; the proxy
+sends each datagram on to the vehicle at --forward from a port of its own (one per GCS, so
+several GCSs can share the vehicle and each gets its own replies), and sends the vehicle's
+replies back to that GCS from the listen port. Every datagram, both ways, goes through the
+link faults below and, with --capture, into an MCAP file (one channel per direction).
+Runs until Ctrl-C (or SIGTERM) or --duration, then prints per-direction counts. Exit 0, or 2 for a
+usage mistake.
+"""
+
+EPILOG = """\
+faults:
+  Every fault applies to each direction on its own (--only limits them to one): uplink is
+  GCS -> vehicle, downlink vehicle -> GCS. --reorder is a probability, as for `vehicle`: a
+  datagram it picks is held back 50 ms so later ones overtake it. --delay/--jitter are
+  aliases of --delay-ms/--jitter-ms. A --drop rule counts its messages per direction, so
+  'MISSION_ACK#1' drops the first MISSION_ACK each way (add --only down for the vehicle's).
+  The same --seed gives the same fault decisions for the same traffic.
+
+examples:
+  mavconform vehicle --listen udp:127.0.0.1:14550 &
+  mavconform proxy --listen udp:127.0.0.1:14551 --forward udp:127.0.0.1:14550 \\
+      --loss 0.1 --dup 0.05 --reorder 0.05 --delay 20 --jitter 10 --capture run.mcap
+  mavconform gcs upload --target udp:127.0.0.1:14551 my.plan
+  mavconform proxy --listen udp:127.0.0.1:0 --forward udp:127.0.0.1:14550 \\
+      --only down --drop 'MISSION_ACK#1' --duration 30
+"""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("proxy", help="a lossy link between a GCS and a vehicle, recording both ways",
+                       description=DESCRIPTION, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--listen", required=True, metavar="URI",
+                   help="where GCSs send to: udp:HOST:PORT (port 0: any free port, printed)")
+    p.add_argument("--forward", required=True, metavar="URI",
+                   help="the vehicle, listening at udp:HOST:PORT")
+    p.add_argument("--only", choices=(UP, DOWN),
+                   help="faults on one direction only: up (GCS -> vehicle) or down (vehicle -> GCS)")
+    p.add_argument("--max-gcs", type=_max_gcs, default=MAX_LEGS, metavar="N",
+                   help=f"GCSs served at once, each with its own port to the vehicle; one more "
+                        f"takes over the quietest one's port (default {MAX_LEGS})")
+    p.add_argument("--duration", type=positive, metavar="S",
+                   help="stop after S seconds (default: run until Ctrl-C)")
+    p.add_argument("--capture", metavar="FILE.mcap",
+                   help="record every frame, both directions, to an MCAP file")
+    p.add_argument("--quiet", action="store_true",
+                   help="print only the listening line and the counts at the end")
+    add_fault_options(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    listen = _endpoint("--listen", args.listen, listen=True)
+    forward = _vehicle_address(_endpoint("--forward", args.forward))
+    faults = fault_model(args)
+    up = faults if args.only in (None, UP) else None
+    down = (faults.copy() if faults is not None else None) if args.only in (None, DOWN) else None
+    proxy = ChaosProxy(forward, up=up, down=down, seed=args.seed, max_legs=args.max_gcs)
+    clock = MonotonicClock()
+    if listen.port == forward[1] and _same_host(listen.host, forward[0]):
+        raise UsageError(f"--forward {args.forward!r} is the proxy's own --listen address")
+    with UdpDriver(clock=clock, seed=args.seed) as driver:
+        try:
+            node = UdpProxy(driver, proxy, listen=listen.address)
+        except UsageError as exc:
+            raise UsageError(f"--listen: {exc}") from None
+        where = "both directions" if args.only is None else f"{args.only}link only"
+        with capture_to(proxy, args.capture):   # after the bind: a bad address leaves no file
+            # Signals are caught before the listening line, so one sent on seeing it stops cleanly.
+            try:
+                with sigterm_as_interrupt():
+                    print(f"chaos proxy listening on udp:{_host(node.address[0])}:{node.address[1]}, "
+                          f"forwarding to udp:{_host(forward[0])}:{forward[1]} "
+                          f"(faults, {where}: {describe_faults(args)})", flush=True)
+                    _serve(driver, node, clock, args)
+            except KeyboardInterrupt:
+                print("stopped", file=sys.stderr)
+        _print_stats(proxy, driver, node)
+    return 0
+
+
+def _serve(driver: UdpDriver, node: UdpProxy, clock: MonotonicClock, args: argparse.Namespace) -> None:
+    """Relay until --duration (or Ctrl-C), printing each new GCS as it first speaks."""
+    end = None if args.duration is None else clock.now() + args.duration
+    while end is None or clock.now() < end:
+        step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))
+        driver.run_until(lambda: bool(node.events), timeout=step)
+        while node.events:
+            event = node.events.popleft()
+            if not args.quiet:
+                print(event, flush=True)
+
+
+def _print_stats(proxy: ChaosProxy, driver: UdpDriver, node: UdpProxy) -> None:
+    errors = {UP: 0, DOWN: 0}
+    legs = set(node.leg_addresses)
+    for (src, _dst), link in driver.stats.items():
+        if link.errors:
+            errors[UP if src in legs else DOWN] += link.errors
+    for direction, label in ((UP, "gcs -> vehicle"), (DOWN, "vehicle -> gcs")):
+        print(f"{direction:<4} {label}: {_counts(proxy.stats[direction])}"
+              + (f", send errors {errors[direction]}" if errors[direction] else ""))
+    extra = [f"{len(node.leg_addresses)} GCS port(s)"]
+    if proxy.pending():
+        extra.append(f"{proxy.pending()} delayed datagram(s) still in flight at the end")
+    if proxy.stray:
+        extra.append(f"{proxy.stray} datagram(s) from strangers ignored")
+    if proxy.overflowed:
+        extra.append(f"{proxy.overflowed} dropped because the delay queue was full")
+    print("; ".join(extra), flush=True)
+
+
+def _counts(s: LinkStats) -> str:
+    return (f"in {s.sent}, out {s.delivered}, dropped {s.dropped}, duplicated {s.duplicated}, "
+            f"reordered {s.reordered}, corrupted {s.corrupted}")
+
+
+def _endpoint(option: str, text: str, *, listen: bool = False) -> UdpUri:
+    try:
+        uri = parse_udp_uri(text, listen=listen)
+    except UsageError as exc:
+        raise UsageError(f"{option}: {exc}") from None
+    if not listen and uri.mode != "udp":
+        raise UsageError(f"{option}: {text!r}: the vehicle must listen (udp:HOST:PORT); "
+                         f"a vehicle that sends first is not supported by the proxy")
+    return uri
+
+
+def _vehicle_address(uri: UdpUri) -> tuple[str, int]:
+    """The vehicle's (ip, port) as its replies will show it, so they can be recognised.
+    A host name resolves to its IPv4 address if it has one (as the vehicle command binds)."""
+    try:
+        ip = str(ipaddress.ip_address(uri.host))
+    except ValueError:
+        ip = _resolve(uri)
+    if ipaddress.ip_address(ip).is_unspecified:
+        raise UsageError(f"--forward: {str(uri)!r}: {ip} is not an address a vehicle listens at")
+    return (ip, uri.port)
+
+
+def _resolve(uri: UdpUri) -> str:
+    last: Exception | None = None
+    for family in (socket.AF_INET, socket.AF_UNSPEC):
+        try:
+            infos = socket.getaddrinfo(uri.host, uri.port, family, socket.SOCK_DGRAM)
+        except (OSError, UnicodeError) as exc:
+            last = exc
+            continue
+        if infos:
+            return str(infos[0][4][0]).split("%")[0]
+    raise UsageError(f"--forward: cannot resolve host {uri.host!r}: {last}")
+
+
+def _same_host(host: str, ip: str) -> bool:
+    if host == ip:
+        return True
+    try:
+        return ipaddress.ip_address(host) == ipaddress.ip_address(ip)
+    except ValueError:
+        return host == "localhost" and ipaddress.ip_address(ip).is_loopback
+
+
+def _max_gcs(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not 1 <= value <= 1024:
+        raise argparse.ArgumentTypeError(f"{text!r} is not in 1..1024")
+    return value
+
+
+def _host(host: str) -> str:
+    return f"[{host}]" if ":" in host else host
+

@@ -1,0 +1,141 @@
+"""`mavconform fuzz`: campaigns, saved findings that replay, reports, usage errors, xdist."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fuzz.case import load_case
+from mavconform.cli import main
+from reports.run_document import load_run
+
+PLANTED = "mutant:raises-on-truncated-frame"
+
+
+def _fuzz(tmp_path: Path, *args: str) -> int:
+    return main(["fuzz", "--findings", str(tmp_path / "found"), "--report-dir", str(tmp_path / "rep"),
+                 "--database", str(tmp_path / "db"), "-q", *args])
+
+
+def test_a_clean_campaign_exits_0_and_reports_every_invariant_passing(tmp_path, capsys) -> None:
+    assert _fuzz(tmp_path, "--mode", "frames", "--examples", "20", "--seed", "3") == 0
+    doc = load_run(tmp_path / "rep" / "fuzz.json")
+    assert doc["summary"]["verdict"] == "pass" and doc["fuzz"]["findings"] == []
+    ids = {c["id"] for c in doc["clauses"]}
+    assert {"FUZZ.FRAMES.still-answers", "FUZZ.FRAMES.no-exception"} <= ids
+    assert doc["run"]["examples"] >= 20 and doc["run"]["units"] > 0
+    out = capsys.readouterr().out
+    assert "findings: none" in out and "examples/s" in out
+    assert not (tmp_path / "found").exists()
+
+
+def test_a_planted_bug_is_found_saved_and_replays(tmp_path, capsys) -> None:
+    assert _fuzz(tmp_path, "--target", PLANTED, "--mode", "frames", "--examples", "200", "--seed", "1") == 1
+    cases = sorted((tmp_path / "found").glob("*.json"))
+    assert len(cases) == 1 and cases[0].with_suffix(".mcap").stat().st_size > 0
+    case = load_case(cases[0])
+    assert case.violation is not None and case.violation.invariant == "no-exception"
+    doc = load_run(tmp_path / "rep" / "fuzz.json")
+    row = next(c for c in doc["clauses"] if c["id"] == "FUZZ.FRAMES.no-exception")
+    assert row["outcome"] == "fail" and row["gating"] and row["exchange"]
+    assert f"mavconform fuzz --replay {cases[0]}" in row["detail"]
+    assert doc["fuzz"]["findings"][0]["reproduced"] is True
+    junit = (tmp_path / "rep" / "fuzz.junit.xml").read_text()
+    assert "FUZZ.FRAMES.no-exception" in junit and "<failure" in junit
+    capsys.readouterr()
+
+    capture = tmp_path / "again.mcap"
+    assert main(["fuzz", "--replay", str(cases[0]), "--capture", str(capture)]) == 1
+    out = capsys.readouterr().out
+    assert "replayed: no-exception" in out and "a different invariant" not in out
+    assert capture.stat().st_size > 0
+
+
+def test_a_replayed_case_that_no_longer_fails_exits_0(tmp_path, capsys) -> None:
+    assert _fuzz(tmp_path, "--target", PLANTED, "--mode", "frames", "--examples", "200", "--seed", "1") == 1
+    path = next((tmp_path / "found").glob("*.json"))
+    fixed = json.loads(path.read_text())
+    fixed["target"] = "builtin:spec"       # the same bytes against a vehicle without the bug
+    path.write_text(json.dumps(fixed))
+    assert main(["fuzz", "--replay", str(path)]) == 0
+    assert "no invariant broke" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--target", "tcp:1:2"], "bad target"),
+    (["--capture", "x.mcap"], "--capture goes with --replay"),
+    (["--replay", "missing.json"], "cannot read fuzz case"),
+    (["--replay", "missing.json", "--examples", "3"], "--examples and --time do not apply"),
+    (["--database", "redis-ish://x"], "--database"),
+])
+def test_usage_mistakes_exit_2_with_one_line(tmp_path, capsys, monkeypatch, args, says) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(["fuzz", *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert says in err and "\n" not in err
+
+
+def test_bad_option_values_exit_2(tmp_path, capsys) -> None:
+    for args in (["--examples", "0"], ["--time", "soon"], ["--mode", "bits"]):
+        with pytest.raises(SystemExit) as exit_:
+            main(["fuzz", *args])
+        assert exit_.value.code == 2
+    capsys.readouterr()
+
+
+def test_database_must_be_a_directory(tmp_path, capsys) -> None:
+    (tmp_path / "file").write_text("x")
+    assert _fuzz(tmp_path, "--database", str(tmp_path / "file")) == 2
+    assert "not a directory" in capsys.readouterr().err
+
+
+def _pytest_fuzz(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+    return subprocess.run(
+        [sys.executable, "-m", "pytest", "--pyargs", "fuzz", "-p", "no:cacheprovider", "-n", "2", "-v",
+         "--fuzz-findings", str(tmp_path / "found"), "--fuzz-database", str(tmp_path / "db"), *args],
+        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+
+
+def test_shards_spread_over_cores_with_xdist_and_share_the_example_database(tmp_path) -> None:
+    clean = _pytest_fuzz(tmp_path, "--fuzz-target", "builtin:spec", "--fuzz-mode", "frames",
+                         "--fuzz-shards", "2", "--fuzz-examples", "10")
+    assert clean.returncode == 0, clean.stdout[-2000:]
+    assert "2 workers" in clean.stdout and "2 passed" in clean.stdout
+
+    planted = _pytest_fuzz(tmp_path, "--fuzz-target", PLANTED, "--fuzz-mode", "frames",
+                           "--fuzz-shards", "2", "--fuzz-examples", "200")
+    assert planted.returncode == 1, planted.stdout[-2000:]
+    assert "2 failed" in planted.stdout and "mavconform fuzz --replay" in planted.stdout
+    assert {"[gw0]", "[gw1]"} <= {w for w in ("[gw0]", "[gw1]") if w in planted.stdout}
+    saved = list((tmp_path / "db").rglob("*"))
+    assert any(p.is_file() for p in saved), "the found examples are in the shared database"
+
+
+def test_a_bad_fuzz_option_is_a_pytest_usage_error(tmp_path) -> None:
+    done = _pytest_fuzz(tmp_path, "--fuzz-target", "builtin:spec", "--fuzz-mode", "bits")
+    assert done.returncode == 4 and "--fuzz-mode" in done.stderr
+
+
+def test_a_finding_keeps_only_the_steps_its_violation_needs() -> None:
+    """The step-removal pass after Hypothesis: steps that do not matter are dropped, judged
+    by replaying, and the kept case still breaks the same invariant."""
+    from fuzz import protocol
+    from fuzz.campaign import minimise
+    from fuzz.case import Case, Violation
+
+    item = {"autocontinue": 1, "command": 5000, "current": 0, "frame": 0, "param1": 0.0, "param2": 0.0,
+            "param3": 0.0, "param4": 0.0, "x": 0, "y": 0, "z": 0.0}
+    upload = {"op": "upload", "type": 1, "items": [item, {**item, "seq": 0}]}   # a repeated seq
+    noise = [{"op": "download", "type": 0}, {"op": "download", "type": 2}]
+    case = Case("protocol", "mutant:non-atomic-upload", 0, (noise[0], upload, noise[1]),
+                Violation("atomic-upload", "seen before minimising"))
+    assert protocol.replay(case).invariant == "atomic-upload"
+    small = minimise(protocol, case)
+    assert small.steps == (upload,) and small.violation.invariant == "atomic-upload"
+    assert protocol.replay(Case("protocol", "builtin:spec", 0, small.steps)) is None   # the mutant's bug

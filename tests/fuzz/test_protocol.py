@@ -1,0 +1,186 @@
+"""The protocol fuzzer, in virtual time: passes on the spec vehicle, finds planted bugs.
+
+- a bounded campaign against builtin:spec finds nothing (every invariant holds);
+- against `mutant:non-atomic-upload` it finds the broken atomicity, shrinks the program to
+  a few steps, and the saved case (JSON) loads and replays to the same invariant, with a
+  capture of every frame;
+- the same seed gives the same examples and the same findings;
+- a vehicle that raises, one that never gives up, the non-atomic profile hook, and a bad
+  step in a hand-edited case.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from fuzz.case import Case, load_case, save_case
+from fuzz.protocol import INVARIANTS, Knobs, replay, search
+from fuzz.protocol import machine as machine_module
+from fuzz.protocol.steps import Runner
+from reference_impl.errors import UsageError
+from reference_impl.mission.server import MissionServer
+
+WAYPOINT = {"frame": 3, "command": 16, "current": 0, "autocontinue": 1, "param1": 0.0,
+            "param2": 0.0, "param3": 0.0, "param4": float("nan"), "x": 473977420,
+            "y": 85455940, "z": 50.0}
+
+
+def upload(n: int, t: int = 0) -> dict:
+    return {"op": "upload", "type": t, "items": [dict(WAYPOINT, x=WAYPOINT["x"] + i) for i in range(n)]}
+
+
+def test_a_bounded_campaign_passes_on_the_spec_vehicle():
+    units: list[int] = []
+    assert search("builtin:spec", seed=5, max_examples=40, on_example=units.append) == []
+    assert len(units) >= 40 and sum(units) > 40 * 3   # examples ran, each with several steps
+
+
+SEARCH = dict(seed=4, max_examples=200)   # finds and shrinks it in a few hundred examples
+
+
+@pytest.fixture(scope="module")
+def non_atomic_findings() -> list[Case]:
+    return search("mutant:non-atomic-upload", **SEARCH)
+
+
+@pytest.fixture(scope="module")
+def non_atomic_finding(non_atomic_findings) -> Case:
+    found = [c for c in non_atomic_findings if c.violation.invariant == "atomic-upload"]
+    assert found, non_atomic_findings
+    return found[0]
+
+
+def test_the_planted_non_atomic_upload_is_found_and_shrunk(non_atomic_finding):
+    case = non_atomic_finding
+    assert case.mode == "protocol" and case.target == "mutant:non-atomic-upload"
+    assert case.violation.invariant == "atomic-upload"
+    assert case.violation.invariant in INVARIANTS
+    assert "none of the versions it accepted" in case.violation.detail
+    assert 1 <= len(case.steps) <= 5, case.steps          # shrunk to a short program
+    assert case.violation.step == len(case.steps) - 1     # it broke on the last step
+
+
+def test_the_saved_case_loads_and_replays_to_the_same_failure(non_atomic_finding, tmp_path):
+    path = save_case(non_atomic_finding, tmp_path)
+    loaded = load_case(path)
+    assert loaded.steps == non_atomic_finding.steps       # NaN params survive the JSON
+    frames = []
+    violation = replay(loaded, capture=frames.append)
+    assert violation == non_atomic_finding.violation       # same invariant, detail and step
+    assert any(r.kind == "rx" and r.dst == "vehicle" for r in frames)
+    # the same program against the spec vehicle breaks nothing
+    spec = Case(loaded.mode, "builtin:spec", loaded.seed, loaded.steps)
+    assert replay(spec) is None
+
+
+def test_the_same_seed_gives_the_same_examples_and_findings(non_atomic_findings, monkeypatch):
+    again = search("mutant:non-atomic-upload", **SEARCH)
+    assert [(c.seed, c.steps, c.violation) for c in again] == \
+        [(c.seed, c.steps, c.violation) for c in non_atomic_findings]
+
+    def programs(seed: int) -> list[str]:
+        """Every step every example ran, in order."""
+        ran: list[str] = []
+
+        class Recording(Runner):
+            def apply(self, step):
+                ran.append(json.dumps(step, sort_keys=True))
+                return super().apply(step)
+
+        monkeypatch.setattr(machine_module, "Runner", Recording)
+        assert search("builtin:spec", seed=seed, max_examples=10) == []
+        return ran
+
+    assert programs(8) == programs(8)
+    assert programs(8) != programs(9)   # another seed explores other programs
+
+
+def test_the_non_atomic_profile_hook_judges_only_confirmed_outcomes(non_atomic_finding):
+    """builtin:ardupilot is non-atomic (VARIANTS A2): a mix after a failed upload is
+    allowed there, so the same program passes when atomicity is not required."""
+    relaxed = Case("protocol", non_atomic_finding.target, non_atomic_finding.seed,
+                   non_atomic_finding.steps, found_by={"atomic": False})
+    assert replay(relaxed) is None
+    # ... while a confirmed upload must still be stored whole
+    runner = Runner("mutant:non-atomic-upload", 0, atomic=False)
+    assert runner.apply(upload(3)) is None and runner.check() is None
+    assert runner.world.stored(0) and len(runner.world.stored(0)) == 3
+
+
+def test_every_step_kind_runs_clean_on_the_spec_vehicle():
+    steps = [
+        {"op": "faults", "up": {"loss": 0.2, "duplicate": 0.1, "reorder": 0.1, "delay": 0.01,
+                                "bursts": [[0.5, 2.0]]},
+         "down": {"loss": 0.2, "delay": 0.01, "drops": [{"name": "MISSION_ACK", "nth": 1, "onwards": False}],
+                  "cut": {"name": "MISSION_REQUEST_INT", "nth": 3, "span": 4}}},
+        upload(30), {"op": "download", "type": 0},
+        {"op": "cancel", "of": upload(10, t=2), "after": 0.05},
+        {"op": "second_gcs", "first": upload(20), "second": upload(5), "after": 0.01},
+        {"op": "stray", "during": upload(20), "after": 0.01, "messages": [
+            {"msg": "MISSION_COUNT", "fields": {"count": 65535, "mission_type": 0, "opaque_id": 0},
+             "to": "target", "from": "a"},
+            {"msg": "MISSION_CLEAR_ALL", "fields": {"mission_type": 255}, "to": "other-system", "from": "b"},
+            {"msg": "MISSION_COUNT", "fields": {"count": 3, "mission_type": 1, "opaque_id": 0},
+             "to": "target", "from": "mute"}]},
+        {"op": "set_current", "seq": 2, "command": True},
+        {"op": "faults", "up": None, "down": None},
+        {"op": "wait", "seconds": 12.0}, {"op": "download", "type": 0}, {"op": "clear", "type": 255},
+    ]
+    runner = Runner("builtin:spec", 4)
+    for i, step in enumerate(steps):
+        assert runner.apply(step) is None, (i, step)
+        assert runner.check() is None, (i, step)
+    results = [r.outcome.value for r in runner.world.a.results]
+    assert "success" in results and "cancelled" in results
+    assert runner.world.b.results[-1].nack is not None   # B was DENIED or refused mid-transfer
+    assert all(runner.world.stored(t) == () for t in (0, 1, 2))
+
+
+def test_a_vehicle_that_raises_is_a_crash_finding(monkeypatch):
+    def boom(self, msg, src, now):
+        raise ZeroDivisionError("planted")
+    monkeypatch.setattr(MissionServer, "_on_clear_all", boom)
+    case = Case("protocol", "builtin:spec", 0, ({"op": "clear", "type": 1}, {"op": "download", "type": 0}))
+    v = replay(case)
+    assert v is not None and v.invariant == "crash" and "ZeroDivisionError: planted" in v.detail
+
+
+def test_a_vehicle_that_never_gives_up_is_not_idle():
+    """A GCS that sends a MISSION_COUNT and then never answers: the spec vehicle gives up
+    after its retries; `mutant:never-gives-up` requests forever."""
+    steps = ({"op": "stray", "during": None, "after": 0.0, "messages": [
+        {"msg": "MISSION_COUNT", "fields": {"count": 2, "mission_type": 0, "opaque_id": 0},
+         "to": "target", "from": "mute"}]},)
+    assert replay(Case("protocol", "builtin:spec", 0, steps)) is None
+    v = replay(Case("protocol", "mutant:never-gives-up", 0, steps))
+    assert v is not None and v.invariant == "idle" and "RECEIVING" in v.detail
+
+
+def test_a_mutant_with_too_many_retries_breaks_the_retry_limit():
+    # from A's first item on, its next 20 messages are lost: the vehicle re-requests to its limit
+    steps = ({"op": "faults", "up": {"cut": {"name": "MISSION_ITEM_INT", "nth": 1, "span": 20}}}, upload(2))
+    assert replay(Case("protocol", "builtin:spec", 0, steps)) is None
+    v = replay(Case("protocol", "mutant:too-many-retries", 0, steps))
+    assert v is not None and v.invariant == "retry-limit" and "limit is 5" in v.detail
+
+
+def test_a_bad_step_in_a_case_is_a_usage_error():
+    with pytest.raises(UsageError, match="step 1: upload step lacks items"):
+        replay(Case("protocol", "builtin:spec", 0, ({"op": "wait", "seconds": 1}, {"op": "upload", "type": 0})))
+    with pytest.raises(UsageError, match="step 0"):
+        replay(Case("protocol", "builtin:spec", 0, ({"op": "fly"},)))
+
+
+def test_knobs_shape_the_campaign():
+    units: list[int] = []
+    knobs = Knobs(max_items=50, steps=3, faults=False)
+    assert search("builtin:spec", seed=2, max_examples=5, on_example=units.append, knobs=knobs) == []
+    assert max(units) <= 3
+
+
+def test_a_wall_time_budget_stops_the_search():
+    units: list[int] = []
+    assert search("builtin:spec", seed=1, stop_after=0.5, on_example=units.append) == []
+    assert 0 < len(units) < 2000
