@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test run demo fuzz fault-table bench clean
+.PHONY: setup test run run-profiles demo fuzz fault-table bench clean
 
 setup: $(VENV)/.installed
 
@@ -18,6 +18,10 @@ test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores)
 
 run: setup           ## the main job: the conformance suite vs builtin:spec over UDP loopback -> reports/out/
 	$(BIN)/mavconform run --target builtin:spec --report-dir reports/out
+
+run-profiles: setup  ## the suite vs builtin:px4 / builtin:ardupilot with their expectation files: only known deviations
+	$(BIN)/mavconform run --target builtin:px4 --expect px4 --report-dir reports/px4 -q
+	$(BIN)/mavconform run --target builtin:ardupilot --expect ardupilot --report-dir reports/ardupilot -q
 
 demo: setup          ## reference GCS <-> reference vehicle over lossy UDP loopback
 	$(BIN)/mavconform demo
@@ -36,4 +40,4 @@ bench: setup         ## figures, not pass/fail
 	$(BIN)/python bench/frame_fuzz.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz fuzz-findings
+	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot fuzz-findings

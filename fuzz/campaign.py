@@ -9,13 +9,15 @@ package renders, so CI shows fuzz findings the way it shows conformance failures
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import importlib
+import struct
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 from reference_impl.errors import UsageError
 from reference_impl.net.capture import McapCapture, json_safe
@@ -25,6 +27,9 @@ from reference_impl.wire.codec import FrameDecoder
 from .case import Case, Violation, save_case
 
 MODES = ("protocol", "frames")
+SHRINK_LIMIT = 60.0          # s Hypothesis may spend shrinking one campaign's findings, at most
+# What a hand-edited case can make a mode's replay raise (bad types or values in its steps).
+MALFORMED = (ValueError, TypeError, KeyError, AttributeError, IndexError, OverflowError, struct.error)
 MAX_EXCHANGE = 400           # events kept per finding in the report (the MCAP has them all)
 MAV_AUTOPILOT_INVALID = 8    # what a GCS puts in its HEARTBEAT
 
@@ -101,15 +106,19 @@ def run_campaign(options: CampaignOptions,
         if on_progress is not None:
             on_progress(progress)
 
-    cases = mode.search(options.target, seed=options.seed, max_examples=options.examples,
-                        stop_after=options.time_s, database=options.database,
-                        on_example=example_done)
+    # A time budget bounds the search; shrinking what it found gets half as long again.
+    shrink = SHRINK_LIMIT if options.time_s is None else min(SHRINK_LIMIT, max(2.0, options.time_s / 2))
+    with shrink_time_limit(shrink):
+        cases = mode.search(options.target, seed=options.seed, max_examples=options.examples,
+                            stop_after=options.time_s, database=options.database,
+                            on_example=example_done)
     duration = progress.elapsed
     findings = []
     for case in cases:
         case = Case(case.mode, case.target, case.seed, case.steps, case.violation,
                     {**case.found_by, "campaign_seed": options.seed})
-        findings.append(save_finding(mode, case, options.findings_dir))
+        findings.append(save_finding(mode, case, options.findings_dir,
+                                     minimise_until=time.monotonic() + shrink))
         progress.findings += 1
         if on_progress is not None:
             on_progress(progress)
@@ -120,7 +129,29 @@ def run_campaign(options: CampaignOptions,
 MINIMISE_REPLAYS = 400       # bound on the replays the step-removal pass may spend per finding
 
 
-def minimise(mode: ModuleType, case: Case, budget: int = MINIMISE_REPLAYS) -> Case:
+@contextlib.contextmanager
+def shrink_time_limit(seconds: float) -> Iterator[None]:
+    """Bound the time Hypothesis spends shrinking (its own cap is 300 s per test). This sets
+    a module constant of Hypothesis's engine, the only handle it offers; if a later version
+    drops it, shrinking keeps Hypothesis's own cap."""
+    try:
+        from hypothesis.internal.conjecture import engine
+    except ImportError:      # pragma: no cover - a Hypothesis without that module
+        yield
+        return
+    if not hasattr(engine, "MAX_SHRINKING_SECONDS"):
+        yield
+        return
+    before = engine.MAX_SHRINKING_SECONDS
+    engine.MAX_SHRINKING_SECONDS = seconds
+    try:
+        yield
+    finally:
+        engine.MAX_SHRINKING_SECONDS = before
+
+
+def minimise(mode: ModuleType, case: Case, budget: int = MINIMISE_REPLAYS,
+             until: float | None = None) -> Case:
     """Drop every step the violation does not need, judged by replaying (in-process targets
     only, where a replay is exact and cheap). Hypothesis shrinks the program it generated;
     this pass also removes steps that stayed only because removing them changed how later
@@ -136,14 +167,15 @@ def minimise(mode: ModuleType, case: Case, budget: int = MINIMISE_REPLAYS) -> Ca
     while changed and budget > 0:
         changed = False
         for i in reversed(range(len(steps))):
-            if budget <= 0:
+            if budget <= 0 or (until is not None and time.monotonic() >= until):
+                budget = 0
                 break
             budget -= 1
             trial = Case(case.mode, case.target, case.seed, tuple(steps[:i] + steps[i + 1:]),
                          case.violation, case.found_by)
             try:
                 got = mode.replay(trial)
-            except UsageError:
+            except (UsageError, *MALFORMED):
                 continue                          # the mode needs that step to read the case
             if got is not None and got.invariant == want:
                 steps = list(trial.steps)
@@ -152,11 +184,12 @@ def minimise(mode: ModuleType, case: Case, budget: int = MINIMISE_REPLAYS) -> Ca
     return best
 
 
-def save_finding(mode: ModuleType, case: Case, directory: str | Path) -> Finding:
+def save_finding(mode: ModuleType, case: Case, directory: str | Path, *,
+                 minimise_until: float | None = None) -> Finding:
     """Save the case, then replay it once with a capture: the MCAP beside the JSON, and the
     exchange for the report. A case that does not replay to the same invariant is kept and
     flagged, since a finding that cannot be reproduced still happened."""
-    case = minimise(mode, case)
+    case = minimise(mode, case, until=minimise_until)
     path = save_case(case, directory)
     mcap = path.with_suffix(".mcap")
     replayed, exchange = replay_recorded(mode, case, mcap)
@@ -175,6 +208,11 @@ def replay_recorded(mode: ModuleType, case: Case,
 
     try:
         violation = mode.replay(case, capture=hook)
+    except UsageError:
+        raise
+    except MALFORMED as exc:
+        raise UsageError(f"the {case.mode} case for {case.target} has a malformed step "
+                         f"({type(exc).__name__}: {exc})") from None
     finally:
         if capture is not None:
             capture.close()

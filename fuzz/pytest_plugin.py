@@ -50,6 +50,8 @@ def _settings(config: pytest.Config) -> dict[str, Any]:
         from conformance.target_uri import parse_target
         parse_target(config.getoption("--fuzz-target"))
         time_s = parse_duration(time_text) if time_text else None
+        from mavconform.fuzz_cmd import open_database
+        open_database(config.getoption("--fuzz-database"))
     except UsageError as exc:
         raise pytest.UsageError(str(exc)) from None
     return {"modes": modes, "shards": shards, "examples": examples, "time_s": time_s}

@@ -83,6 +83,8 @@ def run(args: argparse.Namespace) -> int:
     from fuzz.report import campaign_document, replay_command
     from reports.write import write_reports
 
+    for option, folder in (("--findings", args.findings), ("--report-dir", args.report_dir)):
+        _writable(option, folder)   # before the search: a finding must never be lost to a bad path
     examples = args.examples if args.examples is not None or args.time is not None else DEFAULT_EXAMPLES
     options = CampaignOptions(target=args.target, mode=args.mode, seed=args.seed, examples=examples,
                               time_s=args.time, findings_dir=args.findings,
@@ -102,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     paths = write_reports(doc, args.report_dir, basename="fuzz")
     rate = result.examples / result.duration_s if result.duration_s > 0 else 0.0
     urate = result.units / result.duration_s if result.duration_s > 0 else 0.0
-    print(f"\n{result.examples} examples, {result.units} {unit} in {result.duration_s:.1f} s "
+    print(f"\n{result.examples} examples (shrinking included), {result.units} {unit} in {result.duration_s:.1f} s "
           f"({rate:.1f} examples/s, {urate:.0f} {unit}/s)")
     checked = ", ".join(result.invariants) or "(the mode's oracles)"
     print(f"invariants checked: {checked}")
@@ -128,7 +130,10 @@ def _replay(args: argparse.Namespace) -> int:
           f"seed {case.seed}) against {case.target}", flush=True)
     if case.violation is not None:
         print(f"  recorded: {case.violation}")
-    violation, _ = replay_recorded(mode, case, Path(args.capture) if args.capture else None)
+    try:
+        violation, _ = replay_recorded(mode, case, Path(args.capture) if args.capture else None)
+    except UsageError as exc:
+        raise UsageError(f"{args.replay}: {exc}") from None
     if violation is None:
         print("  replayed: no invariant broke (fixed, or the target differs from the one it was found on)")
         return 0
@@ -137,6 +142,17 @@ def _replay(args: argparse.Namespace) -> int:
     if args.capture:
         print(f"  capture: {args.capture}")
     return 1
+
+
+def _writable(option: str, folder: str) -> None:
+    path = Path(folder)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / ".mavconform-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"{option} {folder}: cannot write there ({exc.strerror or exc})") from None
 
 
 def open_database(spec: str) -> Any:

@@ -141,7 +141,7 @@ class Runner:
                 self.versions.observe(t, stored)
             limit = w.profile.timings.max_retries
             retries = w.vehicle.server.stats.max_consecutive_retries
-            if retries > limit:
+            if w.profile.retry_cap and retries > limit:
                 return self._violation("retry-limit", (
                     f"the vehicle resent one item request {retries} times; the limit is {limit}"))
         return self._probe()

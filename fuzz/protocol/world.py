@@ -43,14 +43,16 @@ class Profile:
 
     atomic: bool = True               # an upload replaces the plan whole or not at all
     timings: Timings = Timings()      # the retry limit the vehicle must keep
+    retry_cap: bool = True            # False: retries end on a protocol timeout (PX4, P3)
 
 
 def profile_for(uri: TargetUri, vehicle: VehicleNode | None) -> Profile:
     """Builtin profiles are held to their own documented timings and atomicity; mutants
     and remote targets to the spec's (a mutant claims to be the spec vehicle)."""
     if uri.kind == "builtin" and vehicle is not None:
-        return Profile(atomic=uri.name not in NON_ATOMIC_PROFILES,
-                       timings=vehicle.server.behaviour.timings)
+        behaviour = vehicle.server.behaviour
+        return Profile(atomic=uri.name not in NON_ATOMIC_PROFILES, timings=behaviour.timings,
+                       retry_cap=behaviour.retry_cap)
     return Profile()
 
 

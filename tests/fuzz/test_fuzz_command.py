@@ -31,7 +31,7 @@ def test_a_clean_campaign_exits_0_and_reports_every_invariant_passing(tmp_path, 
     assert doc["run"]["examples"] >= 20 and doc["run"]["units"] > 0
     out = capsys.readouterr().out
     assert "findings: none" in out and "examples/s" in out
-    assert not (tmp_path / "found").exists()
+    assert not list((tmp_path / "found").iterdir())   # created up front, nothing saved
 
 
 def test_a_planted_bug_is_found_saved_and_replays(tmp_path, capsys) -> None:
@@ -139,3 +139,33 @@ def test_a_finding_keeps_only_the_steps_its_violation_needs() -> None:
     small = minimise(protocol, case)
     assert small.steps == (upload,) and small.violation.invariant == "atomic-upload"
     assert protocol.replay(Case("protocol", "builtin:spec", 0, small.steps)) is None   # the mutant's bug
+
+
+@pytest.mark.parametrize("step", [
+    {"op": "wait", "seconds": "abc"},
+    {"op": "wait", "seconds": 1e12},                 # would walk virtual time for ever
+    {"op": "upload", "type": 99, "items": []},
+    {"op": "upload", "type": 0, "items": "xx"},
+    {"op": "set_current", "seq": 1e9},
+])
+def test_a_hand_edited_case_is_a_usage_error_not_a_traceback(tmp_path, capsys, step) -> None:
+    from fuzz.case import Case, save_case
+
+    path = save_case(Case("protocol", "builtin:spec", 0, (step,)), tmp_path)
+    assert main(["fuzz", "--replay", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"mavconform: error: {path}") and "\n" not in err
+
+
+def test_an_unwritable_findings_folder_is_refused_before_the_search(tmp_path, capsys) -> None:
+    (tmp_path / "file").write_text("x")
+    assert main(["fuzz", "--mode", "frames", "--target", PLANTED, "--findings", str(tmp_path / "file" / "x"),
+                 "--database", "none"]) == 2
+    captured = capsys.readouterr()
+    assert "--findings" in captured.err and "examples" not in captured.out
+
+
+def test_protocol_fuzzing_holds_px4_to_its_own_retry_rule_and_refuses_ardupilot(tmp_path, capsys) -> None:
+    assert _fuzz(tmp_path, "--target", "builtin:px4", "--examples", "60", "--seed", "2") == 0
+    assert _fuzz(tmp_path, "--target", "builtin:ardupilot", "--examples", "5") == 2
+    assert "protocol fuzzing of builtin:ardupilot is not supported" in capsys.readouterr().err
