@@ -8,6 +8,9 @@ negative-control tests, where thousands of protocol seconds cost milliseconds).
 
 from __future__ import annotations
 
+import dataclasses
+import time
+
 from typing import Any, Callable
 
 from reference_impl.net.guard import GuardedNode
@@ -25,14 +28,19 @@ TESTER_SYSTEM, TESTER2_SYSTEM, TESTER_COMPONENT = 245, 246, 190   # 190: MAV_COM
 DISCOVERY_TIMEOUT = 5.0   # s for the first HEARTBEAT (heartbeats are 1 Hz), scaled
 
 
-def build_vehicle(uri: TargetUri) -> VehicleNode:
+def build_vehicle(uri: TargetUri, *, wall_clock: Callable[[], float] = time.time,
+                  **config: Any) -> VehicleNode:
+    """The in-process vehicle a `builtin:` or `mutant:` target names, with `VehicleConfig`
+    fields overridden by `config` (the fuzzers run signing vehicles). `wall_clock` feeds
+    the signing timestamps of builtin vehicles; mutants are built as they declare."""
     if uri.kind == "mutant":
         from .mutants import MUTANTS
-        return MUTANTS[uri.name].build(VehicleConfig())
+        return MUTANTS[uri.name].build(dataclasses.replace(VehicleConfig(), **config))
+    base = VehicleConfig()
     if uri.name != "spec":
         from reference_impl.profiles import load_profile
-        return load_profile(uri.name).vehicle()
-    return VehicleNode(VehicleConfig())
+        base = load_profile(uri.name).config
+    return VehicleNode(dataclasses.replace(base, **config), wall_clock=wall_clock)
 
 
 class Session:

@@ -20,7 +20,8 @@ from types import ModuleType
 from typing import Any, Callable, Iterator
 
 from reference_impl.errors import UsageError
-from reference_impl.net.capture import McapCapture, json_safe
+from conformance.harness.exchange import MAX_EVENTS, message_fields
+from reference_impl.net.capture import McapCapture
 from reference_impl.net.sim import CaptureRecord
 from reference_impl.wire.codec import FrameDecoder
 
@@ -30,7 +31,6 @@ MODES = ("protocol", "frames")
 SHRINK_LIMIT = 60.0          # s Hypothesis may spend shrinking one campaign's findings, at most
 # What a hand-edited case can make a mode's replay raise (bad types or values in its steps).
 MALFORMED = (ValueError, TypeError, KeyError, AttributeError, IndexError, OverflowError, struct.error)
-MAX_EXCHANGE = 400           # events kept per finding in the report (the MCAP has them all)
 MAV_AUTOPILOT_INVALID = 8    # what a GCS puts in its HEARTBEAT
 
 
@@ -256,8 +256,7 @@ class ExchangeRecorder:
                 self._target = record.src
             if name in ("HEARTBEAT", "GLOBAL_POSITION_INT"):
                 continue
-            fields = {f: json_safe(getattr(msg, f)) for f in msg.get_fieldnames()}
-            self._add(t, record.src, "", name, fields)
+            self._add(t, record.src, "", name, message_fields(msg))
         if not decoded:
             self._add(t, record.src, "note",
                       f"{len(record.data)} bytes that decode to no frame: {record.data[:24].hex()}"
@@ -280,7 +279,7 @@ class ExchangeRecorder:
         return src if isinstance(src, str) else ":".join(map(str, src))
 
     def _add(self, t: float, src: Any, kind: str, msg: str, fields: dict[str, Any]) -> None:
-        if len(self._raw) >= MAX_EXCHANGE:
+        if len(self._raw) >= MAX_EVENTS:      # the MCAP keeps them all
             self.omitted += 1
             return
         self._raw.append((t, src, kind, msg, fields))

@@ -12,10 +12,9 @@ from pathlib import Path
 from typing import Any
 
 from mavconform import __version__
+from reports.run_document import FORMAT, outcome_counts
 
 from .campaign import CampaignResult, Finding
-
-FORMAT = "mavconform-run/1"
 
 
 def row_id(mode: str, invariant: str) -> str:
@@ -32,8 +31,7 @@ def campaign_document(result: CampaignResult) -> dict[str, Any]:
     rows = [_row(opts.mode, name, result.invariants.get(name, name), by_invariant.get(name, []))
             for name in names]
     failing = sum(1 for r in rows if r["gating"])
-    counts = {o: sum(1 for r in rows if r["outcome"] == o)
-              for o in ("pass", "fail", "known-deviation", "not-applicable", "skipped", "error")}
+    counts = outcome_counts(rows)
     run: dict[str, Any] = {
         "target": opts.target, "started": result.started.strftime("%Y-%m-%dT%H:%M:%SZ"),
         "duration_s": round(result.duration_s, 3), "seed": opts.seed, "mode": opts.mode,

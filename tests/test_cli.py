@@ -10,23 +10,16 @@ import pytest
 from mavconform.cli import main
 from reference_impl.files import SAMPLES_DIR, load_plan
 
+from .vehicle_process import vehicle_process
+
 DEMO = str(SAMPLES_DIR / "demo.plan")
 
 
 @pytest.fixture
 def vehicle_port():
     """A `mavconform vehicle` process on 127.0.0.1 with an OS-chosen port; killed afterwards."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mavconform", "vehicle", "--listen", "udp:127.0.0.1:0",
-         "--loss", "0.05", "--duration", "60"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        line = proc.stdout.readline()   # bounded: the process exits after --duration at the latest
-        assert "listening on udp:127.0.0.1:" in line, line + proc.stderr.read()
-        yield int(line.split("listening on udp:127.0.0.1:")[1].split()[0])
-    finally:
-        proc.kill()
-        proc.wait(timeout=10)
+    with vehicle_process("--loss", "0.05") as port:
+        yield port
 
 
 @pytest.mark.udp

@@ -20,11 +20,11 @@ The oracle, after a batch (`check`):
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 from typing import Any
 
 from conformance.harness import plans
+from conformance.session import build_vehicle
 from conformance.target_uri import TargetUri
 from fuzz.case import Violation
 from reference_impl.errors import LocalProtocolError
@@ -37,7 +37,7 @@ from reference_impl.net.sim import CaptureHook, SimNetwork
 from reference_impl.net.udp import UdpDriver
 from reference_impl.net.uri import local_bind_for
 from reference_impl.session import GcsSession
-from reference_impl.vehicle import VehicleConfig, VehicleNode
+from reference_impl.vehicle import VehicleNode
 from reference_impl.wire.signing import SigningKey
 
 from .admission import Admission
@@ -119,19 +119,6 @@ class _Counted:
         return self.node.take_outgoing()
 
 
-def build_vehicle(uri: TargetUri, key: bytes | None, wall_clock: Any) -> VehicleNode:
-    if uri.kind == "mutant":
-        from conformance.mutants import MUTANTS
-        return MUTANTS[uri.name].build(VehicleConfig())
-    base = VehicleConfig()
-    if uri.name != "spec":      # builtin:px4 / ardupilot: that profile's vehicle configuration
-        from reference_impl.profiles import load_profile
-        base = load_profile(uri.name).config
-    signing = SigningKey(key) if key is not None else None
-    config = dataclasses.replace(base, signing=signing, require_signature=signing is not None)
-    return VehicleNode(config, wall_clock=wall_clock)
-
-
 class Rig:
     """A connected target, ready for batches. Call `start()` first; `close()` at the end."""
 
@@ -158,7 +145,8 @@ class Rig:
                                signing=SigningKey(self.key) if self.key else None)
         wall = self.clock.wall
         if uri.in_process:
-            self.vehicle = build_vehicle(uri, self.key, wall)
+            keyed = {"signing": SigningKey(self.key), "require_signature": True} if self.key else {}
+            self.vehicle = build_vehicle(uri, wall_clock=wall, **keyed)
             self.guard = GuardedNode(self.vehicle)
             self.counted = _Counted(self.guard)
             gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],

@@ -5,8 +5,6 @@ and float items lose precision)."""
 from __future__ import annotations
 
 import dataclasses
-import subprocess
-import sys
 
 import pytest
 
@@ -18,6 +16,8 @@ from reference_impl.mission.adaptations import ARDUPILOT, NONE, PX4, for_autopil
 from reference_impl.mission.items import MissionType as T
 from reference_impl.net import SimNetwork
 from reference_impl.profiles import load_profile
+
+from ..vehicle_process import vehicle_process
 
 
 @pytest.mark.parametrize("name, chosen", [("spec", NONE), ("px4", PX4), ("ardupilot", ARDUPILOT)])
@@ -69,17 +69,8 @@ def test_a_fixed_set_is_kept_and_without_adaptations_the_plan_is_mangled():
 @pytest.fixture
 def ardupilot_port():
     """`mavconform vehicle --profile ardupilot` on 127.0.0.1, OS-chosen port; killed afterwards."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mavconform", "vehicle", "--profile", "ardupilot",
-         "--listen", "udp:127.0.0.1:0", "--duration", "60"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        line = proc.stdout.readline()
-        assert "listening on udp:127.0.0.1:" in line, line + proc.stderr.read()
-        yield int(line.split("listening on udp:127.0.0.1:")[1].split()[0])
-    finally:
-        proc.kill()
-        proc.wait(timeout=10)
+    with vehicle_process("--profile", "ardupilot") as port:
+        yield port
 
 
 @pytest.mark.udp
