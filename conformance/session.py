@@ -20,6 +20,7 @@ from reference_impl.net.uri import local_bind_for
 from reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.tester import Tester, record_traffic
+from .harness.tester_link import TesterLink
 from .harness.tester_node import MAV_AUTOPILOT_INVALID, MAV_TYPE_GCS, TesterNode
 from .outcome import TargetUnresponsive
 from .target_uri import TargetUri
@@ -44,11 +45,16 @@ def build_vehicle(uri: TargetUri, *, wall_clock: Callable[[], float] = time.time
 
 
 class Session:
-    """What a check receives. `t` is the scripted GCS; `second()` a second GCS."""
+    """What a check receives. `t` is the scripted GCS; `second()` a second GCS.
+
+    `shared_link`: the second GCS speaks from the first one's socket (another system id on
+    the same link, routed by target_system), as a target whose GCS link is bound to one
+    peer needs (VARIANTS.md L1, L2). Default: shared for every external target and for an
+    in-process vehicle whose profile models such a link; a socket of its own otherwise."""
 
     def __init__(self, uri: TargetUri, *, scale: float = 1.0, virtual: bool = False,
                  seed: int = 0, allow_flight: bool | None = None,
-                 capture: CaptureHook | None = None) -> None:
+                 capture: CaptureHook | None = None, shared_link: bool | None = None) -> None:
         self.uri = uri
         self.scale = scale
         self.virtual = virtual
@@ -61,6 +67,7 @@ class Session:
         self.target_address: Any = None
         self._second: Tester | None = None
         node = TesterNode("tester", TESTER_SYSTEM, TESTER_COMPONENT)
+        self.link = TesterLink(node)
         if virtual:
             if not uri.in_process:
                 raise ValueError("virtual time needs an in-process target")
@@ -68,7 +75,7 @@ class Session:
             self.vehicle = build_vehicle(uri)
             self.guard = GuardedNode(self.vehicle)
             self.driver.add_node("vehicle", self.guard)
-            self.driver.add_node("tester", node)
+            self.driver.add_node("tester", self.link)
             self.driver.connect("tester", "vehicle")
             self.target_address = "vehicle"
             self.vehicle.endpoint.add_address("tester")
@@ -80,20 +87,23 @@ class Session:
                     self.vehicle = build_vehicle(uri)
                     self.guard = GuardedNode(self.vehicle)
                     self.target_address = self.driver.add_node(self.guard)
-                    tester_address = self.driver.add_node(node)
+                    tester_address = self.driver.add_node(self.link)
                     node.endpoint.add_address(self.target_address)
                     # in-process, the vehicle may know us from the start: no 1 s wait for
                     # its first HEARTBEAT to find a listener
                     self.vehicle.endpoint.add_address(tester_address)
                 elif uri.kind == "udp":
-                    self.driver.add_node(node, bind=(local_bind_for(uri.udp.host), 0))
+                    self.driver.add_node(self.link, bind=(local_bind_for(uri.udp.host), 0))
                     self.target_address = uri.udp.address
                     node.endpoint.add_address(self.target_address)
                 else:  # udpin: the target finds us
-                    self.driver.add_node(node, bind=uri.udp.address)
+                    self.driver.add_node(self.link, bind=uri.udp.address)
             except BaseException:
                 self.driver.close()
                 raise
+        if shared_link is None:
+            shared_link = self.vehicle.config.single_peer_link if self.vehicle is not None else True
+        self.shared_link = shared_link
         if capture is not None:
             self.driver.add_capture(capture)
         self.t = Tester(node, self.driver, scale=scale)
@@ -134,11 +144,14 @@ class Session:
         return self.identity
 
     def second(self) -> Tester:
-        """A second GCS (another system id, its own socket), created on first use."""
+        """A second GCS (another system id; on the first one's link or a socket of its own,
+        as `shared_link` says), created on first use."""
         if self._second is None:
             node = TesterNode("tester2", TESTER2_SYSTEM, TESTER_COMPONENT)
             node.target = self.t.node.target
-            if self.virtual:
+            if self.shared_link:
+                self.link.join(node)
+            elif self.virtual:
                 self.driver.add_node("tester2", node)
                 self.driver.connect("tester2", "vehicle")
             else:

@@ -29,7 +29,7 @@ def _as_json(profile: Profile) -> dict[str, Any]:
     return {
         "name": profile.name, "description": profile.description,
         "knobs": [{"knob": s.knob, "value": s.value, "variant": s.variant, "source": s.source, "why": s.why,
-                   **({"alternative": vars(s.alternative)} if s.alternative else {})}
+                   "seen_on": s.seen_on, **({"alternative": vars(s.alternative)} if s.alternative else {})}
                   for s in profile.settings],
         "documented": [vars(d) for d in profile.documented],
     }
@@ -54,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
             print("  every knob at the spec default")
         for s in profile.settings:
             mark = "*" if s.alternative else " "
-            print(f" {mark}{s.variant:<4} {s.knob} = {json.dumps(s.value)}\n        {s.why} [{s.source}]")
+            seen = f" (seen on {s.seen_on})" if s.seen_on else ""
+            print(f" {mark}{s.variant:<4} {s.knob} = {json.dumps(s.value)}\n        {s.why} [{s.source}]{seen}")
             if s.alternative:
                 a = s.alternative
                 print(f"        alternative {a.variant}: {s.knob} = {json.dumps(a.value)}: {a.why} [{a.source}]")

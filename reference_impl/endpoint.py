@@ -4,6 +4,10 @@ Both reference nodes (vehicle and GCS) own one. It turns datagrams into frames, 
 which address each (system, component) last spoke from (seed 001, routing: a system learns
 the link of a peer from the messages it sees), and turns `Send` actions into datagrams for
 the right addresses. Bad bytes are counted and kept for the report, never raised.
+
+`single_peer=True` models a link bound to one peer, as real SITL GCS links are (VARIANTS.md
+L1: ArduPilot's `udpclient` socket is connected to one address; L2: PX4 locks a link to its
+first sender): the first configured or heard address is the only one read or sent to.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ MAX_ADDRESSES = 64   # learned peers kept for broadcasts; the oldest learned one
 class MavlinkEndpoint:
     def __init__(self, system: int, component: int, *, dialect: Any = None, version: int = 2,
                  signing: SigningKey | None = None, require_signature: bool = False,
-                 wall_clock: Callable[[], float] = time.time) -> None:
+                 wall_clock: Callable[[], float] = time.time, single_peer: bool = False) -> None:
         self.encoder = FrameEncoder(system, component, dialect=dialect, version=version,
                                     signing=signing, wall_clock=wall_clock)
         self.decoder = FrameDecoder(dialect=dialect, signing=signing, wall_clock=wall_clock)
@@ -35,6 +39,9 @@ class MavlinkEndpoint:
         self._configured: set[Address] = set()     # given by add_address: never forgotten
         self.decode_errors: deque[tuple[Address, DecodeError]] = deque(maxlen=MAX_KEPT_ERRORS)
         self.rejected_signatures = 0
+        self.single_peer = single_peer
+        self.locked_to: Address | None = None      # with single_peer: the one peer address
+        self.foreign_datagrams = 0                 # with single_peer: datagrams from elsewhere, unread
         self._outbox: list[tuple[bytes, Address]] = []
 
     @property
@@ -47,11 +54,18 @@ class MavlinkEndpoint:
 
     def add_address(self, address: Address) -> None:
         """A place to send to before anyone has spoken (the target of `udp:HOST:PORT`)."""
+        if self.single_peer:
+            if self.locked_to is not None and address != self.locked_to:
+                return
+            self.locked_to = address
         self._configured.add(address)
         self.addresses.setdefault(address, None)
 
     def receive(self, data: bytes, source: Address) -> list[Frame]:
         """Frames in a datagram that passed the signature policy; errors are recorded."""
+        if self.single_peer and self.locked_to is not None and source != self.locked_to:
+            self.foreign_datagrams += 1
+            return []
         frames: list[Frame] = []
         peers = self.peers
         for item in self.decoder.feed(data):
@@ -65,6 +79,8 @@ class MavlinkEndpoint:
             peers[(item.src_system, item.src_component)] = source
             frames.append(item)
         if frames and source not in self.addresses:
+            if self.single_peer:
+                self.locked_to = source
             self._learn(source)   # only a source that sent a valid frame is a peer
         return frames
 

@@ -44,6 +44,8 @@ class VehicleConfig:
     require_signature: bool = False
     # HEARTBEAT.autopilot (MAV_AUTOPILOT): GCSs adapt to it (generic 4, ArduPilot 3, PX4 12)
     autopilot: int = MAV_AUTOPILOT_GENERIC_MISSION_FULL
+    # the GCS link is bound to one peer address (real SITL links: VARIANTS.md L1, L2)
+    single_peer_link: bool = False
 
 
 class VehicleNode:
@@ -55,7 +57,7 @@ class VehicleNode:
         self.config = cfg = config or VehicleConfig()
         self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
                                         signing=cfg.signing, require_signature=cfg.require_signature,
-                                        wall_clock=wall_clock)
+                                        wall_clock=wall_clock, single_peer=cfg.single_peer_link)
         self.server = server_class(cfg.system, cfg.component, cfg.behaviour)
         self.server.home = home_item(cfg.home)
         self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed)

@@ -27,3 +27,15 @@ def test_learned_addresses_are_bounded_and_configured_ones_kept():
         ep.receive(heartbeat(200), ("127.0.0.1", 30000 + port))
     assert len(ep.addresses) == MAX_ADDRESSES and ("127.0.0.1", 9) in ep.addresses
     assert ("127.0.0.1", 30000 + 3 * MAX_ADDRESSES - 1) in ep.addresses
+
+
+def test_a_single_peer_link_reads_and_answers_only_its_first_peer():
+    """VARIANTS.md L1/L2: a real SITL GCS link is bound to one address; others are never read."""
+    ep = MavlinkEndpoint(1, 1, single_peer=True)
+    first, other = ("127.0.0.1", 14550), ("127.0.0.1", 14551)
+    assert len(ep.receive(heartbeat(245), first)) == 1
+    assert ep.receive(heartbeat(246), other) == [] and ep.foreign_datagrams == 1
+    ep.send(d.MAVLink_heartbeat_message(2, 3, 0, 0, 4, 3))
+    assert [to for _, to in ep.take_outgoing()] == [first]
+    # a second identity on the first peer's address is heard (MAVLink routing by system id)
+    assert len(ep.receive(heartbeat(246), first)) == 1

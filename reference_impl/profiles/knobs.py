@@ -157,6 +157,8 @@ _KNOBS = (
     Knob("legacy_warnings", BEHAVIOUR, "legacy_warnings", _bool, "STATUSTEXT warning for MISSION_REQUEST / MISSION_ITEM"),
     # vehicle
     Knob("autopilot", CONFIG, "autopilot", _count(0, 255), "HEARTBEAT.autopilot (MAV_AUTOPILOT)"),
+    Knob("single_peer_link", CONFIG, "single_peer_link", _bool,
+         "the GCS link is bound to the first peer address: other senders are never read"),
 )
 
 KNOBS: dict[str, Knob] = {k.name: k for k in _KNOBS}

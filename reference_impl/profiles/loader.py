@@ -10,6 +10,7 @@
     variant = "P3"                     # optional in a user file; required in bundled ones
     source = "our fork, commit abc123"
     why = "we cap retries at 5"
+    seen_on = "our fork v2.1 SITL"     # optional: the real version it was observed on
 
 A knob set again replaces the base's setting. `[[documented]]` tables (variant, kind =
 "same-as-spec" | "not-reproduced", why, source) record rows that need no knob. Any mistake
@@ -40,7 +41,7 @@ BUNDLED = Path(__file__).parent
 BUILTIN_PROFILES: tuple[str, ...] = ("spec", "px4", "ardupilot")
 MAX_BASE_DEPTH = 8
 _TOP_KEYS = {"name", "description", "base", "knob", "documented"}
-_KNOB_KEYS = {"knob", "value", "variant", "source", "why", "alternative"}
+_KNOB_KEYS = {"knob", "value", "variant", "source", "why", "alternative", "seen_on"}
 _ALT_KEYS = {"value", "variant", "source", "why"}
 _DOC_KEYS = {"variant", "kind", "why", "source"}
 DOC_KINDS = ("same-as-spec", "not-reproduced")
@@ -140,8 +141,11 @@ def _setting(entry: dict, where: str, *, strict: bool) -> KnobSetting:
                              f"{', '.join(sorted(_ALT_KEYS))}")
         _parse(name, alt["value"], f"{where} ({name}).alternative")
         alternative = Alternative(alt["value"], str(alt["variant"]), str(alt["source"]), str(alt["why"]))
+    seen_on = entry.get("seen_on", "")
+    if not isinstance(seen_on, str):
+        raise UsageError(f"{where} ({name}): 'seen_on' must be a string")
     return KnobSetting(name, entry["value"], text["variant"].strip(), text["source"].strip(),
-                       text["why"].strip(), alternative)
+                       text["why"].strip(), alternative, seen_on.strip())
 
 
 def _documented(entry: dict, where: str) -> Documented:

@@ -30,6 +30,7 @@ class KnobSetting:
     source: str
     why: str
     alternative: Alternative | None = None
+    seen_on: str = ""          # the real autopilot version it was observed on, if any
 
 
 @dataclass(frozen=True)

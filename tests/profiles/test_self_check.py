@@ -22,7 +22,7 @@ ROWS = {
     "px4": {f"P{i}" for i in range(1, 15)} | {"P1'", "P2'"},
     "ardupilot": {f"A{i}" for i in range(1, 20)},
 }
-VARIANT_ID = re.compile(r"^(HB|[AP]\d+'?)$")
+VARIANT_ID = re.compile(r"^(HB|[APL]\d+'?)$")   # L: the real SITL link rows
 
 
 def _run(name: str) -> dict:
