@@ -116,6 +116,8 @@ CLAUSES: tuple[Clause, ...] = (
     _c("MIS.DN.08", MUST, "An error ACK from the GCS cancels the download",
        f"{SEED_000}:457", "An error can be signaled in response to any request using a MISSION_ACK "
        "message containing an error code. This must cancel the operation."),
+    _c("MIS.DN.09", MUST, "A downloaded item has current=1 exactly when it is the item the vehicle reports current",
+       f"{SEED_000}:337", "When downloading, whether the item is the current mission item."),
     # --- clear ----------------------------------------------------------------------------
     _c("MIS.CLR.01", MUST, "MISSION_CLEAR_ALL is answered by MISSION_ACK ACCEPTED",
        f"{SEED_000}:511", "Drone responds with MISSION_ACK with result type of MAV_MISSION_ACCEPTED."),
@@ -174,6 +176,10 @@ CLAUSES: tuple[Clause, ...] = (
     _c("MIS.GCS.03", MUST, "Mission messages addressed to another system are not acted on",
        f"{SEED_001}:96", "The target_system matches its system id and target_component is "
        "broadcast (target_component omitted or zero)."),
+    _c("MIS.GCS.04", MUST, "Another GCS's MISSION_ACK neither ends nor disturbs a running download",
+       f"{SEED_000}:543", "On successful completion, the message must contain type of "
+       "MAV_MISSION_ACCEPTED; this is sent by the system that is receiving the command/data (e.g. "
+       "the drone for mission upload or the GCS for mission download)."),
     # --- idle, cancellation, errors -------------------------------------------------------
     _c("MIS.IDL.01", MAY, "A stray item or request in idle is ignored or refused, never accepted",
        f"{SEED_000}:525", _IDLE),
@@ -202,6 +208,9 @@ CLAUSES: tuple[Clause, ...] = (
     _c("MIS.FRM.04", MUST, "The vehicle broadcasts HEARTBEAT regularly",
        f"{SEED_001}:149", "Therefore, to set up a connection every component must regularly "
        "broadcast its Heartbeat and monitor for heartbeats from other systems."),
+    _c("MIS.FRM.05", MUST, "A frame with a bad checksum, or truncated, is not acted on; the vehicle keeps answering",
+       f"{SEED_001}:5", "It provides methods for detecting packet drops, corruption, and for packet "
+       "authentication."),
     # --- plan ids -------------------------------------------------------------------------
     _c("MIS.OID.01", MAY, "The opaque_id of the upload ACK comes back in the download's MISSION_COUNT",
        f"{UPSTREAM}:5879", "Id of current on-vehicle mission, fence, or rally point plan (on "

@@ -1,18 +1,27 @@
-"""Expectation files: the clauses a given autopilot is known to fail, and why.
+"""Expectation files: the clauses a given autopilot is known to fail, how, and why.
 
     # conformance/expectations/px4.toml
     [[deviation]]
-    clause = "MIS.CAN.01"
-    variant = "P2"                      # VARIANTS.md row
-    reason = "upload cancellation is ignored; the vehicle times out by itself"
+    clause = "MIS.UP.09"
+    variant = "P3"                      # VARIANTS.md row (or the profile's own id)
+    reason = "uncapped 250 ms retries until the 5 s protocol timeout"
+    observed = "the item due was requested again * times; expected at most *"
+    evidence = "the item due was requested again 19 times; expected at most 5"
+    seen_on = "PX4 v1.16.0 SITL (SIH), 2026-11-23"
 
 `--expect NAME` reads conformance/expectations/NAME.toml; `--expect PATH` reads a file.
-A clause listed here that fails is a known deviation; one that passes is reported as
+A clause listed here that fails is a known deviation, but only the failure it names:
+`observed` is the verdict's detail with its numbers, ids and quoted values as `*`
+(fnmatch), so a different failure of the same clause still fails the run. An entry
+without `observed` excuses any failure of its clause. One that passes is reported as
 "deviation no longer observed", so the files cannot silently go stale.
+`mavconform report expectations RUN.json` drafts such a file from a run.
 """
 
 from __future__ import annotations
 
+import fnmatch
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,14 +38,32 @@ else:  # pragma: no cover - Python 3.10
 BUNDLED = Path(__file__).parent / "expectations"
 
 
+OTHER_FAILURE_PREFIX = "fails otherwise than the known deviation"
+_VARIABLE = re.compile(r"0x[0-9a-fA-F]+|-?\d+(?:\.\d+)?(?:e[+-]?\d+)?")
+_STARS = re.compile(r"\*(?:[ ,.]*\*)+")
+
+
+def observed_pattern(detail: str) -> str:
+    """What a failure looked like, with what varies run to run (counts, times, positions,
+    ids) as `*`: the fnmatch pattern an expectation names. Brackets are escaped."""
+    pattern = _STARS.sub("*", _VARIABLE.sub("*", detail))
+    return pattern.replace("[", "[[]")
+
+
 @dataclass(frozen=True)
 class Deviation:
     clause: str
     reason: str
     variant: str = ""
+    observed: str = ""        # fnmatch pattern of the failure it excuses ("": any failure)
+    evidence: str = ""        # the failure it was made from, as the run reported it
+    seen_on: str = ""         # the target (autopilot and version) it was seen on
 
     def describe(self) -> str:
         return f"{self.variant}: {self.reason}" if self.variant else self.reason
+
+    def excuses(self, detail: str) -> bool:
+        return not self.observed or fnmatch.fnmatchcase(detail, self.observed)
 
 
 def resolve(name_or_path: str) -> Path:
@@ -75,10 +102,16 @@ def load(name_or_path: str) -> dict[str, Deviation]:
             raise UsageError(f"{where}: unknown clause {clause!r}")
         if not isinstance(reason, str) or not reason.strip():
             raise UsageError(f"{where}: 'reason' must be a non-empty string")
-        extra = set(entry) - {"clause", "reason", "variant"}
+        extra = set(entry) - {"clause", "reason", "variant", "observed", "evidence", "seen_on"}
         if extra:
             raise UsageError(f"{where}: unknown key {sorted(extra)[0]!r}")
         if clause in out:
             raise UsageError(f"{where}: {clause} is listed twice")
-        out[clause] = Deviation(clause, reason.strip(), str(entry.get("variant", "")))
+        texts = {}
+        for key in ("variant", "observed", "evidence", "seen_on"):
+            value = entry.get(key, "")
+            if not isinstance(value, str):
+                raise UsageError(f"{where}: {key!r} must be a string")
+            texts[key] = value.strip()
+        out[clause] = Deviation(clause, reason.strip(), **texts)
     return out

@@ -1,8 +1,10 @@
 """Which outcomes fail a run: expectations applied, strictness, and baseline regressions.
 
-Default: a run fails on any unexpected `fail` of a MUST or MAY clause (a MAY behaviour the
-target has but does wrong), or on `error` (undecided because the target went silent or a
-precondition broke). SHOULD failures fail the run only with `--strict`. With a baseline,
+Default: a run fails on any unexpected `fail` of a MUST clause, or on `error` (undecided
+because the target went silent or a precondition broke). SHOULD failures fail the run only
+with `--strict`; MAY clauses never do (the behaviour is optional: a failure is reported,
+never gated on). A listed clause that fails in a way its expectation does not name stays a
+`fail`, with the expected failure beside it. With a baseline,
 only regressions fail it: a clause that passed in the baseline and now fails or errs.
 """
 
@@ -12,10 +14,11 @@ from typing import Any
 
 from .catalogue import BY_ID
 from .clause import Level
-from .expectations import Deviation
+from .expectations import OTHER_FAILURE_PREFIX, Deviation
 from .outcome import ClauseResult, Outcome
 
 NO_LONGER = "deviation no longer observed"
+OTHER_FAILURE = OTHER_FAILURE_PREFIX
 
 
 def apply_expectations(results: list[ClauseResult], expected: dict[str, Deviation]) -> None:
@@ -24,8 +27,10 @@ def apply_expectations(results: list[ClauseResult], expected: dict[str, Deviatio
         if dev is None:
             continue
         r.expectation = dev.describe()
-        if r.outcome is Outcome.FAIL:
+        if r.outcome is Outcome.FAIL and dev.excuses(r.detail):
             r.outcome = Outcome.KNOWN_DEVIATION
+        elif r.outcome is Outcome.FAIL and not r.detail.startswith(OTHER_FAILURE):
+            r.detail = f"{OTHER_FAILURE} (it excuses: {dev.observed}): {r.detail}"
         elif r.outcome is Outcome.PASS:
             r.detail = f"{NO_LONGER} (expected to fail: {dev.describe()})"
 
@@ -35,7 +40,8 @@ def gates(result: ClauseResult, *, strict: bool) -> bool:
         return True
     if result.outcome is not Outcome.FAIL:
         return False
-    return strict or BY_ID[result.clause_id].level is not Level.SHOULD
+    level = BY_ID[result.clause_id].level
+    return level is Level.MUST or (strict and level is Level.SHOULD)
 
 
 def baseline_outcomes(doc: dict[str, Any]) -> dict[str, str]:

@@ -20,6 +20,7 @@ from reference_impl.mission import messages as m
 from reference_impl.mission.constants import MissionResult
 from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
 
+from . import readiness
 from .checks import CHECKS
 from .clause import Clause
 from .harness import procedures
@@ -62,6 +63,7 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *,
                           time.monotonic() - started, 0.0, unresponsive=str(exc))
 
     snapshot = _snapshot(session) if restore else None
+    identity["prepared"] = readiness.prepare(session.t).line()
     dead: str | None = None
     interrupted = False
     for clause in clauses:
@@ -144,11 +146,14 @@ SETTLE_ROUNDS = 40
 
 
 def _settle(session: Session) -> None:
-    """Leave the target idle for the next clause: cancel whatever may be open, then let
-    its last replies arrive (a few ms on loopback), so none is taken for the next clause's."""
+    """Leave the target idle for the next clause: cancel whatever may be open, for every
+    plan type a tester has used (an invalid one too: a target may have opened a transfer
+    for it), then let its last replies arrive (a few ms on loopback), so none is taken for
+    the next clause's."""
     for t in session.testers():
-        for mt in PLAN_TYPES:
+        for mt in sorted(set(map(int, PLAN_TYPES)) | t.touched_types):
             t.node.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mt, t.target))
+        t.touched_types.clear()
     inbox = session.t.node.inbox
     for _ in range(SETTLE_ROUNDS):   # bounded: at most SETTLE_ROUNDS quiet periods
         seen = len(inbox)
@@ -179,7 +184,7 @@ def _restore(session: Session, snapshot: dict[MissionType, list[MissionItem]]) -
     restored, failed = [], []
     for mt, items in snapshot.items():
         now = procedures.download(t, mt)
-        if now is not None and procedures.same_plan(now.items, items):
+        if now is not None and procedures.same_plan(now.items, items, t.form):
             continue
         frame = procedures.upload(t, items, mt) if items else procedures.clear(t, mt)
         ok = frame is not None and frame.msg.type == MissionResult.ACCEPTED

@@ -20,6 +20,7 @@ from reference_impl.net.uri import local_bind_for
 from reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.tester import Tester, record_traffic
+from .harness.stored_form import form_for_autopilot, form_of_behaviour
 from .harness.tester_link import TesterLink
 from .harness.tester_node import MAV_AUTOPILOT_INVALID, MAV_TYPE_GCS, TesterNode
 from .outcome import TargetUnresponsive
@@ -137,10 +138,12 @@ class Session:
             self.target_address = node.endpoint.peers.get(node.target)
         self.t.target = node.target
         msg = frame.msg
+        self.t.form = (form_of_behaviour(self.vehicle.config.behaviour, f"builtin:{self.uri.name}")
+                       if self.vehicle is not None else form_for_autopilot(msg.autopilot))
         self.identity = {
             "system": frame.src_system, "component": frame.src_component, "type": msg.type,
             "autopilot": msg.autopilot, "mavlink_version": frame.version,
-            "address": _label(self.target_address)}
+            "address": _label(self.target_address), "stored_form": self.t.form.describe()}
         return self.identity
 
     def second(self) -> Tester:
@@ -159,6 +162,7 @@ class Session:
                 self.driver.add_node(node, bind=(local_bind_for(host), 0))
             node.endpoint.add_address(self.target_address)
             tester = Tester(node, self.driver, scale=self.scale)
+            tester.form = self.t.form
             tester.exchange = self.t.exchange
             record_traffic(tester)
             self._second = tester

@@ -3,14 +3,19 @@
 Each line: id, level, role, title, and where the requirement comes from. Filter with
 --clauses (comma-separated globs) and --level. --mutants lists the negative controls:
 reference vehicles with one behaviour broken, usable as targets (`mutant:NAME`).
+--coverage prints the spec-coverage map instead (docs/spec-coverage.md): every requirement
+sentence of seed 000 and the clauses that check it, or why none does.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
+from pathlib import Path
 
 from conformance import catalogue
+from reference_impl.errors import UsageError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -21,10 +26,37 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--requirement", action="store_true", help="print each requirement sentence too")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--mutants", action="store_true", help="list the mutant vehicles instead")
+    p.add_argument("--coverage", action="store_true",
+                   help="print the spec-coverage map (Markdown): each requirement sentence of seed 000 "
+                        "and the clauses that check it, or why none does")
+    p.add_argument("--output", metavar="FILE", help="with --coverage: write it here instead of stdout")
     p.set_defaults(run=run)
 
 
+def _coverage(args: argparse.Namespace) -> int:
+    from conformance.spec_coverage import render_markdown
+    if args.clauses or args.level or args.mutants or args.json or args.requirement:
+        raise UsageError("--coverage: covers every clause; it takes no other option but --output")
+    text = render_markdown()
+    if not args.output:
+        sys.stdout.write(text)
+        return 0
+    out = Path(args.output)
+    if not out.parent.is_dir():
+        raise UsageError(f"--output {args.output}: no such directory {str(out.parent)!r}")
+    try:
+        out.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise UsageError(f"--output {args.output}: {exc.strerror or exc}") from None
+    print(f"wrote {out}")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.coverage:
+        return _coverage(args)
+    if args.output:
+        raise UsageError("--output: only with --coverage")
     chosen = catalogue.select(args.clauses, args.level)
     if args.mutants:
         from conformance.mutants import MUTANTS

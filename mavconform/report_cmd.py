@@ -1,7 +1,13 @@
 """`mavconform report render RUN.json`: re-render the reports of an earlier run.
+`mavconform report expectations RUN.json`: draft an expectations file from a run.
 
-With no output option, writes all of them (JSON, JUnit, Markdown, HTML) next to RUN.json's
-name in --dir (default: RUN.json's folder). A bad or foreign file gets one line naming it.
+render: with no output option, writes all of them (JSON, JUnit, Markdown, HTML) next to
+RUN.json's name in --dir (default: RUN.json's folder).
+expectations: one [[deviation]] per clause that failed (or was a known deviation), naming
+the failure it excuses (`observed`, the detail with its numbers as `*`), the run's verdict
+as `evidence`, and `seen_on`. Reason and variant are taken from --base where it lists the
+clause; any other entry says it is unconfirmed: read each against the autopilot's source
+before you keep it. A bad or foreign file gets one line naming it.
 """
 
 from __future__ import annotations
@@ -25,6 +31,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--markdown", metavar="OUT", help="write the Markdown summary to OUT")
     r.add_argument("--dir", metavar="DIR", help="write every report into DIR")
     r.set_defaults(run=render)
+    e = rsub.add_parser("expectations", help="draft an expectations file from a run.json",
+                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    e.add_argument("run_json", metavar="RUN.json")
+    e.add_argument("--base", metavar="NAME|FILE",
+                   help="an expectations file (or bundled name) to take reasons and variants from")
+    e.add_argument("--seen-on", metavar="TEXT", default="",
+                   help="the target the run was made on, e.g. 'PX4 v1.16.0 SITL (SIH), 2026-11-23'")
+    e.add_argument("--output", metavar="FILE", help="write it to FILE (default: standard output)")
+    e.set_defaults(run=draft_expectations)
 
 
 def render(args: argparse.Namespace) -> int:
@@ -43,4 +58,39 @@ def render(args: argparse.Namespace) -> int:
             except OSError as exc:
                 raise UsageError(f"cannot write {path!r}: {exc.strerror}") from None
             print(path)
+    return 0
+
+
+UNCONFIRMED = "unconfirmed: read this failure against the autopilot's source before keeping it"
+
+
+def draft_expectations(args: argparse.Namespace) -> int:
+    import json
+
+    from conformance import expectations
+    from reports import load_run
+    doc = load_run(args.run_json)
+    base = expectations.load(args.base) if args.base else {}
+    seen_on = args.seen_on.strip() or f"{doc['run']['target']}, {doc['run']['started'][:10]}"
+    out = [f"description = {json.dumps(f'Clauses {seen_on} fails, drafted from {Path(args.run_json).name}')}"]
+    for clause in doc["clauses"]:
+        if clause["outcome"] not in ("fail", "known-deviation"):
+            continue
+        known = base.get(clause["id"])
+        detail = clause["detail"]
+        if detail.startswith(expectations.OTHER_FAILURE_PREFIX):
+            detail = detail.split("): ", 1)[-1]
+        entry = {"clause": clause["id"], "variant": known.variant if known else "",
+                 "reason": known.reason if known else UNCONFIRMED,
+                 "observed": expectations.observed_pattern(detail), "evidence": detail, "seen_on": seen_on}
+        out.append("[[deviation]]\n" + "\n".join(f"{k} = {json.dumps(v)}" for k, v in entry.items() if v))
+    text = "\n\n".join(out) + "\n"
+    if not args.output:
+        print(text, end="")
+        return 0
+    try:
+        Path(args.output).write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise UsageError(f"cannot write {args.output!r}: {exc.strerror}") from None
+    print(args.output)
     return 0

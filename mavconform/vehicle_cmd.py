@@ -49,6 +49,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--capacity", type=seq_number, metavar="N",
                    help="most mission items stored; more gets MAV_MISSION_NO_SPACE (default: the profile's, 1000)")
     p.add_argument("--autostart", action="store_true", help="start flying as soon as a mission is accepted")
+    p.add_argument("--single-peer", action="store_true",
+                   help="bind the link to the first GCS address heard, as PX4 and ArduPilot SITL links are "
+                        "(the px4 and ardupilot profiles model that in the suite; served here, any GCS may "
+                        "connect unless this is given)")
     p.add_argument("--speed", type=positive, default=10.0, metavar="M/S", help="flight speed (default 10)")
     p.add_argument("--duration", type=positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
@@ -65,7 +69,8 @@ def run(args: argparse.Namespace) -> int:
     if args.capacity is not None:
         behaviour = dataclasses.replace(behaviour, capacity={**behaviour.capacity, MissionType.MISSION: args.capacity})
     config = dataclasses.replace(profile.config, system=args.system, component=args.component,
-                                 autostart=args.autostart, speed=args.speed, behaviour=behaviour)
+                                 autostart=args.autostart, speed=args.speed, behaviour=behaviour,
+                                 single_peer_link=args.single_peer)
     faults = fault_model(args)
     clock = MonotonicClock()
     vehicle = VehicleNode(config, wall_clock=clock.wall)

@@ -150,7 +150,7 @@ class VehicleNode:
     def _on_command(self, msg: Any, source: tuple[int, int], now: float) -> None:
         if msg.target_system not in (0, self.config.system) or msg.target_component not in (0, self.config.component):
             return
-        if msg.command == Cmd.DO_SET_MISSION_CURRENT:
+        if msg.command == Cmd.DO_SET_MISSION_CURRENT and self.server.behaviour.set_current_command:
             self._send(self.server.command_set_current(msg.param1, source, now))
             self.flight.retarget(now)
         elif msg.command == Cmd.MISSION_START:

@@ -137,6 +137,10 @@ def run_facts(doc: dict[str, Any]) -> list[tuple[str, str]]:
         else:
             shown = value if isinstance(value, str) else value_text(value)
         facts.append((labels.get(key, key), shown))
+    identity = doc.get("identity") or {}
+    for key, label in (("stored_form", "plans compared as"), ("prepared", "target prepared")):
+        if identity.get(key):
+            facts.append((label, identity[key]))
     gating = doc["gating"]
     facts.append(("gating", gating["mode"]))
     restore = doc["restore"]

@@ -20,6 +20,7 @@ from ..harness.tester import Tester
 from ..outcome import ClauseFailed, PreconditionFailed
 from ..session import Session
 from . import check
+from .upload import silence_window
 
 MISSION = MissionType.MISSION
 MT = int(MISSION)
@@ -63,10 +64,10 @@ def stray_item_or_request_not_accepted(s: Session) -> None:
            "MISSION_REQUEST_LIST before it")
     t.send(m.request_message(1, MISSION, t.target))
     _judge_stray_answers(t, "a stray MISSION_REQUEST_INT 1")
-    if any(procedures.comparable(it) == procedures.comparable(stray[0]) for it in held):
+    if any(procedures.comparable(it, t.form) == procedures.comparable(stray[0], t.form) for it in held):
         raise ClauseFailed("a stray MISSION_ITEM_INT 0 sent in idle is now in the stored plan; expected it "
                            "to be ignored or refused")
-    if not procedures.same_plan(held, old):
+    if not procedures.same_plan(held, old, t.form):
         raise PreconditionFailed(f"the vehicle holds {len(held)} items, not the {len(old)}-item plan it "
                                  "accepted before the stray item (MIS.UP.04 judges that)")
 
@@ -92,23 +93,25 @@ class CancelledUpload:
     old: list[MissionItem]
     late_requests: list[tuple[float, int]]   # (s after the cancel, seq) of requests that still came
     stored: list[MissionItem]
+    window: float                            # how long requests were watched for (unscaled s)
 
 
 def cancelled_upload(s: Session) -> CancelledUpload:
-    return s.shared("cancelled_upload", lambda: _observe_cancelled_upload(s.t))
+    window = silence_window(s, AFTER_CANCEL_WINDOW)   # measured outside the shared observation
+    return s.shared("cancelled_upload", lambda: _observe_cancelled_upload(s.t, window))
 
 
-def _observe_cancelled_upload(t: Tester) -> CancelledUpload:
+def _observe_cancelled_upload(t: Tester, window: float) -> CancelledUpload:
     procedures.ensure_plan(t, plans.mission(3, variant=62), MISSION)
     old = procedures.stored(t, MISSION)
     _partial_upload(t, plans.mission(3, variant=63), answered=2)
     t.note("the GCS answers the request for item 2 with MISSION_ACK OPERATION_CANCELLED")
     t.send(m.ack_message(CANCELLED, MISSION, t.target))
-    seen = t.collect(request(mission_type=MT), AFTER_CANCEL_WINDOW)
+    seen = t.collect(request(mission_type=MT), window)
     late = [(dt, f.msg.seq) for dt, f in seen]
     if late:   # make sure it is over before reading the plan back
         t.send(m.ack_message(CANCELLED, MISSION, t.target))
-    return CancelledUpload(old, late, procedures.stored(t, MISSION))
+    return CancelledUpload(old, late, procedures.stored(t, MISSION), window)
 
 
 @check("MIS.CAN.01")
@@ -117,14 +120,14 @@ def cancel_stops_upload_requests(s: Session) -> None:
     if obs.late_requests:
         dt, seq = obs.late_requests[0]
         raise ClauseFailed(f"after MISSION_ACK OPERATION_CANCELLED the vehicle kept requesting: "
-                           f"{len(obs.late_requests)} request(s) in {AFTER_CANCEL_WINDOW * s.scale:g} s, "
+                           f"{len(obs.late_requests)} request(s) in {obs.window * s.scale:g} s, "
                            f"the first for item {seq} after {dt:.3f} s; expected none")
 
 
 @check("MIS.CAN.02")
 def cancelled_upload_keeps_plan(s: Session) -> None:
     obs = cancelled_upload(s)
-    procedures.require_same_plan(obs.stored, obs.old, "after an upload cancelled at item 2 of 3")
+    procedures.require_same_plan(obs.stored, obs.old, "after an upload cancelled at item 2 of 3", s.t.form)
 
 
 @check("MIS.CAN.03")

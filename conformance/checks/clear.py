@@ -85,7 +85,7 @@ def clear_leaves_other_types(s: Session) -> None:
         raise NotApplicable("the vehicle stores only mission plans (fence and rally were refused "
                             "as unsupported), so there is no other type to keep")
     for mission_type in others:   # the vehicle must hold them before the clear can be judged
-        if not procedures.same_plan(procedures.stored(t, mission_type), stored[mission_type]):
+        if not procedures.same_plan(procedures.stored(t, mission_type), stored[mission_type], t.form):
             raise PreconditionFailed(f"setup: the vehicle does not hold the {mission_type.label} plan "
                                      "it accepted (MIS.UP.04 judges that)")
     frame = _clear_once(t, MISSION)
@@ -94,7 +94,7 @@ def clear_leaves_other_types(s: Session) -> None:
                                  "(MIS.CLR.01 judges that)")
     for mission_type in others:
         procedures.require_same_plan(procedures.stored(t, mission_type), stored[mission_type],
-                                     f"after clearing the mission plan, the {mission_type.label} plan")
+                                     f"after clearing the mission plan, the {mission_type.label} plan", t.form)
 
 
 @check("MIS.CLR.04")

@@ -29,12 +29,6 @@ def _current_is(seq: int):
     return msg("MISSION_CURRENT", seq=seq)
 
 
-def _command_name(result: int) -> str:
-    try:
-        return f"MAV_RESULT_{CommandResult(result).name}"
-    except ValueError:
-        return f"MAV_RESULT {result}"
-
 
 def _text(statustext) -> str:
     text = statustext.text
@@ -51,7 +45,8 @@ def _set_current(t: Tester, seq: int) -> None:
 def _plan(t: Tester, variant: int) -> None:
     """A fresh 3-item plan, which the vehicle must report holding: a set-current is only
     judged against a plan the vehicle has."""
-    procedures.ensure_plan(t, plans.mission(PLAN_SIZE, variant), MISSION)
+    accepted = procedures.ensure_plan(t, plans.mission(PLAN_SIZE, variant), MISSION)
+    procedures.await_plan_taken(t, accepted)
     t.mark()
     t.send(m.request_list_message(MISSION, t.target))
     frame = t.poll_for(msg("MISSION_COUNT", mission_type=int(MISSION)), t.timings.default_timeout)
@@ -133,7 +128,7 @@ def set_current_command_acked(s: Session) -> None:
     reply = t.expect(msg("COMMAND_ACK", command=int(Cmd.DO_SET_MISSION_CURRENT)))
     if reply.msg.result != CommandResult.ACCEPTED:
         raise ClauseFailed(f"MAV_CMD_DO_SET_MISSION_CURRENT 2 was answered "
-                           f"{_command_name(reply.msg.result)}; expected MAV_RESULT_ACCEPTED")
+                           f"{procedures.command_result_name(reply.msg.result)}; expected MAV_RESULT_ACCEPTED")
     t.expect(_current_is(2))
 
 

@@ -11,6 +11,7 @@ from reference_impl.mission.items import MissionItem, MissionType, xy_scale
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, ack, item, msg
+from ..harness.stored_form import StoredForm
 from ..harness.tester import Tester
 from ..outcome import ClauseFailed, PreconditionFailed
 from ..session import Session
@@ -81,7 +82,7 @@ def request_list_draws_stored_count(s: Session) -> None:
         return
     # Is it our plan, miscounted, or did the accepted upload not store it (MIS.UP.04's case)?
     held = _fetch(t, min(max(count, 1), len(items)))
-    if held is None or not procedures.same_plan(held, items[:len(held)]):
+    if held is None or not procedures.same_plan(held, items[:len(held)], t.form):
         raise PreconditionFailed(f"the vehicle reports {count} items and does not hold the "
                                  f"{len(items)}-item plan it accepted (MIS.UP.04 judges that)")
     raise ClauseFailed(f"MISSION_REQUEST_LIST was answered with count {count}; expected "
@@ -113,19 +114,21 @@ def request_int_draws_item_int(s: Session) -> None:
         _request(t, want.seq)
         frame = t.expect(msg("MISSION_ITEM_INT", seq=want.seq, mission_type=MT))
         got = m.item_from_message(frame.msg)
-        if got is None or not procedures.same_plan([got], [want]):
+        if got is None or not procedures.same_plan([got], [want], t.form):
             raise ClauseFailed(f"MISSION_REQUEST_INT {want.seq} was answered with "
                                f"{_describe(got) if got else 'an unreadable item'}; expected the "
                                f"stored item {_describe(want)}")
     _end(t)
 
 
-def _float_matches(frame_msg, want: MissionItem) -> bool:
+def _float_matches(frame_msg, want: MissionItem, form: StoredForm) -> bool:
     """MISSION_ITEM carries x/y as float32: allow one float32 step of rounding."""
     got = m.item_from_message(frame_msg)
     if got is None:
         return False
-    if not procedures.same_plan([replace(got, x=want.x, y=want.y)], [want]):
+    if form.same([got], [want]):
+        return True   # equal in the target's stored form (e.g. its home in slot 0)
+    if not form.same([replace(got, x=want.x, y=want.y)], [want]):
         return False
     scale = xy_scale(want.frame)
     for have, exact in ((frame_msg.x, want.x / scale), (frame_msg.y, want.y / scale)):
@@ -151,7 +154,7 @@ def request_float_draws_item_float(s: Session) -> None:
         if frame.msg._type != "MISSION_ITEM":
             raise ClauseFailed(f"MISSION_REQUEST {want.seq} was answered with {frame.msg._type}; "
                                "expected MISSION_ITEM (the float form the GCS asked in)")
-        if not _float_matches(frame.msg, want):
+        if not _float_matches(frame.msg, want, t.form):
             got = m.item_from_message(frame.msg)
             raise ClauseFailed(f"MISSION_REQUEST {want.seq} was answered with "
                                f"{_describe(got) if got else 'an unreadable item'}; expected the "
@@ -252,3 +255,69 @@ def error_ack_cancels_download(s: Session) -> None:
     except ClauseFailed:
         _end(t)   # close the download the vehicle kept open, for the clauses after this one
         raise
+
+
+# --- MIS.DN.09 ----------------------------------------------------------------------------
+
+CURRENT_PLAN = 4   # items in the plan the current flag is judged on
+CURRENT_SEQ = 2    # the item made current: neither slot 0 (home on ArduPilot, A1) nor where a
+                   # flight starts (0, or 1 after a home slot), so a fixed flag cannot pass
+
+
+def _inbox_mark(t: Tester) -> object:
+    """The last frame received so far (times do not order frames: in virtual time many
+    arrive at one instant)."""
+    inbox = t.node.inbox
+    return inbox[-1] if inbox else None
+
+
+def _currents_after(t: Tester, mark: object) -> list[int]:
+    """The seqs of every MISSION_CURRENT received after `mark`, oldest first."""
+    seqs = []
+    for entry in reversed(t.node.inbox):
+        if entry is mark:
+            break
+        if entry[1].msg._type == "MISSION_CURRENT":
+            seqs.append(entry[1].msg.seq)
+    return seqs[::-1]
+
+
+@check("MIS.DN.09")
+def download_flags_the_current_item(s: Session) -> None:
+    """The `current` flag is judged against the item the vehicle itself reports current in
+    MISSION_CURRENT (its own numbering: with home in slot 0 that is the download's too), not
+    against what the GCS asked for."""
+    t = s.t
+    items = plans.mission(CURRENT_PLAN, variant=19)
+    procedures.ensure_plan(t, items, MISSION)
+    asked = _inbox_mark(t)
+    t.mark()
+    t.note(f"the GCS makes item {CURRENT_SEQ} current; the vehicle's MISSION_CURRENT says which item is")
+    t.send(m.set_current_message(CURRENT_SEQ, t.target))
+    if t.poll_for(msg("MISSION_CURRENT", seq=CURRENT_SEQ), t.timings.default_timeout) is not None:
+        current = CURRENT_SEQ
+    else:
+        reported = _currents_after(t, asked)
+        if not reported:
+            raise PreconditionFailed(f"setup: after MISSION_SET_CURRENT {CURRENT_SEQ} the vehicle sent no "
+                                     "MISSION_CURRENT, so which item is current is unknown (MIS.CUR.01 "
+                                     "judges that)")
+        current = reported[-1]
+        t.note(f"the vehicle reports item {current} current (it did not take item {CURRENT_SEQ})")
+    before = _inbox_mark(t)
+    got = procedures.download(t, MISSION)
+    if got is None:
+        raise PreconditionFailed("the download of the plan did not complete")
+    moved = sorted(set(_currents_after(t, before)) - {current})
+    if moved:
+        raise PreconditionFailed(f"the vehicle reported item(s) {moved} current during the download "
+                                 f"(item {current} before it): the current item moved while it was read")
+    if got.count <= current:
+        raise PreconditionFailed(f"the vehicle reports item {current} current but a download has only "
+                                 f"{got.count} items")
+    wrong = [f"item {it.seq} current={it.current}" for it in got.items
+             if it.current != (1 if it.seq == current else 0)]
+    if wrong:
+        raise ClauseFailed(f"the vehicle reports item {current} current (MISSION_CURRENT seq={current}), "
+                           f"but its download has {', '.join(wrong)}; expected current=1 on item "
+                           f"{current} and current=0 on the other {got.count - 1}")

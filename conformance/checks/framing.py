@@ -203,3 +203,109 @@ def heartbeat_is_regular(s: Session) -> None:
     if len(seen) < 2:
         raise ClauseFailed(f"{len(seen)} HEARTBEAT(s) in {HEARTBEAT_WINDOW * t.scale:g} s; expected at least 2 "
                            "(a component broadcasts its HEARTBEAT regularly, nominally at 1 Hz)")
+
+
+# --- MIS.FRM.05 ---------------------------------------------------------------------------
+
+import time  # noqa: E402  (appended section: the imports above are shared)
+
+from ..harness.sentinel import answers_before_sentinel  # noqa: E402
+from ..outcome import TargetUnresponsive  # noqa: E402
+
+BAD_CRC_FLIP = 0x5A5A      # XORed into the checksum (fuzz.frames.mutators.bad_crc)
+# After a frame cut short: bytes with no frame marker in them. A decoder that reads each
+# datagram alone drops them; a stream parser (mavlink_parse_char keeps its state across
+# datagrams) finishes the cut-off frame with them, fails its checksum and skips the rest,
+# so the next real frame is read cleanly. 0x55 as a target_system is not the target's.
+FILLER = bytes([0x55]) * 280
+
+
+def _damaged_frames(t: Tester) -> list[tuple[str, bytes]]:
+    """MISSION_CLEAR_ALL and MISSION_COUNT 0 (each would empty the plan if acted on), each
+    once with a bad checksum and once cut off before its checksum; properly addressed."""
+    from fuzz.frames.mutators import MutationContext, bad_crc, truncate   # the frame fuzzer's faults
+
+    ctx = MutationContext(key=b"", wrong_key=b"", wall_clock=time.time)   # neither fault signs
+    out = []
+    for name, message in (("MISSION_CLEAR_ALL", m.clear_all_message(MISSION, t.target)),
+                          ("MISSION_COUNT 0", m.count_message(0, MISSION, t.target))):
+        frame = t.node.endpoint.encoder.encode(message)
+        out.append((f"{name} with a bad checksum", bad_crc(frame, BAD_CRC_FLIP, ctx)))
+        out.append((f"{name} cut off before its checksum", truncate(frame, len(frame) - 3, ctx)))
+        out.append(("bytes with no frame marker (ends the cut-off frame in a stream parser)", FILLER))
+    return out
+
+
+def _send_raw(t: Tester, data: bytes, what: str) -> None:
+    """`data` to the target as one datagram, as the tester's messages go (the tester node
+    sends messages only, so the bytes go into its endpoint's outbox directly)."""
+    endpoint = t.node.endpoint
+    address = endpoint.peers.get(t.target)
+    for to in [address] if address is not None else list(endpoint.addresses):
+        endpoint._outbox.append((data, to))
+    t.note(f"raw datagram: {what} ({len(data)} bytes {data[:12].hex()}...)")
+    t.driver.run_until(lambda: True, timeout=0.0)
+
+
+def _heard_after(t: Tester, name: str, mark: object) -> bool:
+    """Whether a `name` frame was received after the inbox entry `mark` (times do not
+    order frames: in virtual time many arrive at one instant)."""
+    for entry in reversed(t.node.inbox):
+        if entry is mark:
+            return False
+        if entry[1].msg._type == name:
+            return True
+    return False
+
+
+def _heard_within(t: Tester, name: str, seconds: float) -> bool:
+    """Whether a `name` frame was received in the last `seconds` (scaled)."""
+    since = t.now() - seconds * t.scale
+    for at, frame in reversed(t.node.inbox):
+        if at < since:
+            return False
+        if frame.msg._type == name:
+            return True
+    return False
+
+
+def _silenced(s: Session, what: str) -> ClauseFailed:
+    crash = s.guard.crash if s.guard is not None else None
+    if crash is not None:
+        return ClauseFailed(f"the damaged frames crashed the in-process vehicle: {crash}")
+    return ClauseFailed(what)
+
+
+@check("MIS.FRM.05")
+def damaged_frames_not_acted_on(s: Session) -> None:
+    t = s.t
+    procedures.ensure_plan(t, plans.mission(3, variant=83), MISSION)
+    before = procedures.stored(t, MISSION)
+    # HEARTBEAT is judged after the damaged frames only if it was coming before them (a
+    # vehicle that does not beat regularly is MIS.FRM.04's finding, not this clause's)
+    beating = _heard_within(t, "HEARTBEAT", HEARTBEAT_WINDOW)
+    t.mark()
+    sent_after = t.node.inbox[-1] if t.node.inbox else None
+    for what, data in _damaged_frames(t):
+        _send_raw(t, data, what)
+    try:
+        replies = answers_before_sentinel(t)
+        alive = not beating or t.wait_until(lambda: _heard_after(t, "HEARTBEAT", sent_after),
+                                            HEARTBEAT_WINDOW)
+    except TargetUnresponsive as exc:
+        raise _silenced(s, f"after the damaged frames the target fell silent: {exc}") from None
+    if replies:
+        reply = replies[0].msg
+        shown = ", ".join(f"{k}={getattr(reply, k)}" for k in ("seq", "count", "type", "mission_type")
+                          if hasattr(reply, k))
+        raise ClauseFailed(f"MISSION_CLEAR_ALL / MISSION_COUNT 0 frames with a bad checksum or cut off "
+                           f"drew {reply._type}{{{shown}}}; expected no answer (a damaged frame is dropped)")
+    if not alive:
+        raise _silenced(s, f"no HEARTBEAT came in the {HEARTBEAT_WINDOW * t.scale:g} s after the damaged "
+                        "frames; expected the vehicle to go on as before")
+    got = procedures.download(t, MISSION)
+    if got is None:
+        raise _silenced(s, "after the damaged frames a normal download of the plan did not complete; "
+                        "expected the vehicle to answer as before")
+    procedures.require_same_plan(got.items, before, "after MISSION_CLEAR_ALL and MISSION_COUNT 0 frames "
+                                 "with a bad checksum or cut off", t.form)

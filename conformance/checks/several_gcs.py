@@ -120,5 +120,66 @@ def other_system_messages_ignored(s: Session) -> None:
         raise ClauseFailed(f"messages addressed to system {other[0]} drew {got._type}{{{shown}}} from "
                            f"system {system}; expected no answer")
     procedures.require_same_plan(procedures.stored(t, MISSION), old,
-                                 f"after messages addressed to system {other[0]}")
+                                 f"after messages addressed to system {other[0]}", t.form)
 
+
+
+# --- MIS.GCS.04 ---------------------------------------------------------------------------
+
+# What the second GCS sends before each of the first GCS's requests for items 1, 2, 3: the
+# ACK that ends a download, a cancel, and an error. None of them is from the GCS receiving
+# the data (seed 000, "Errors/Completion"), so none may end the first GCS's download.
+FOREIGN_ACKS = (MissionResult.ACCEPTED, MissionResult.OPERATION_CANCELLED, MissionResult.ERROR)
+
+from ..harness.match import ITEMS, msg  # noqa: E402  (appended section: the imports above are shared)
+
+
+@check("MIS.GCS.04")
+def second_gcs_ack_does_not_end_download(s: Session) -> None:
+    t, t2 = s.t, s.second()
+    items = plans.mission(len(FOREIGN_ACKS) + 1, variant=55)
+    procedures.ensure_plan(t, items, MISSION)
+    t.mark()
+    t.send(m.request_list_message(MISSION, t.target))
+    count = procedures.setup_expect(t, msg("MISSION_COUNT", mission_type=MT),
+                                    "the first GCS starts a download").msg.count
+    if count != len(items):
+        t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, MISSION, t.target))
+        raise PreconditionFailed(f"the vehicle reported {count} items for the {len(items)}-item plan "
+                                 "just uploaded (MIS.DN.01 judges that)")
+    got = []
+    reply = msg(ITEMS, mission_type=MT) | ack(mission_type=MT)
+    for seq in range(count):
+        if seq:
+            code = FOREIGN_ACKS[seq - 1]
+            t.note(f"the second GCS sends MISSION_ACK {procedures.result_name(code)} for the mission plan, "
+                   "in the middle of the first GCS's download")
+            t2.send(m.ack_message(code, MISSION, t2.target))
+        t.send(m.request_message(seq, MISSION, t.target))
+        frame = t.poll_for(reply, t.timings.default_timeout)
+        if frame is not None and frame.msg._type != "MISSION_ACK" and frame.msg.seq == seq:
+            got.append(m.item_from_message(frame.msg))
+            continue
+        t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, MISSION, t.target))
+        if not seq:
+            raise PreconditionFailed("setup: the first GCS's MISSION_REQUEST_INT 0 drew "
+                                     + ("nothing" if frame is None else frame.msg._type)
+                                     + " (MIS.DN.02 judges that)")
+        after = (f"after the second GCS's MISSION_ACK {procedures.result_name(FOREIGN_ACKS[seq - 1])}, "
+                 f"the first GCS's MISSION_REQUEST_INT {seq}")
+        if frame is None:
+            raise ClauseFailed(f"{after} was not answered; expected MISSION_ITEM_INT {seq} (the download "
+                               "is the first GCS's)")
+        if frame.msg._type == "MISSION_ACK":
+            raise ClauseFailed(f"{after} was answered MISSION_ACK {procedures.result_name(frame.msg.type)}: "
+                               f"the download was ended; expected MISSION_ITEM_INT {seq}")
+        raise ClauseFailed(f"{after} was answered {frame.msg._type} {frame.msg.seq}; expected "
+                           f"MISSION_ITEM_INT {seq}")
+    t.send(m.ack_message(MissionResult.ACCEPTED, MISSION, t.target))
+    if None in got or procedures.same_plan(got, items, t.form):
+        return   # an unreadable item is MIS.DN.02's to judge
+    # Not the uploaded plan: disturbed, or just what this vehicle serves (MIS.DN.02's case)?
+    clean = procedures.stored(t, MISSION)
+    if not procedures.same_plan(got, clean, t.form):
+        procedures.require_same_plan(got, clean, "the download another GCS's MISSION_ACKs were sent "
+                                     "into served other items than an undisturbed download", t.form)

@@ -64,7 +64,7 @@ def types_stored_independently(s: Session) -> None:
             if other is not changed:
                 procedures.require_same_plan(procedures.stored(t, other), held[other],
                                              f"after uploading a new {changed.label} plan, the "
-                                             f"{other.label} plan changed")
+                                             f"{other.label} plan changed", t.form)
         held[changed] = procedures.stored(t, changed)
 
 
@@ -136,7 +136,7 @@ def _download_checked(t: Tester, mt: MissionType, want: list[MissionItem]) -> No
             raise ClauseFailed(f"{mt.label} item {seq} came as {got._type} with mission_type="
                                f"{got.mission_type}; expected mission_type={int(mt)}")
         item = m.item_from_message(got)
-        if item is None or procedures.comparable(item) != procedures.comparable(expected):
+        if item is None or not t.form.same([item], [expected]):
             raise ClauseFailed(f"{mt.label} item {seq} came as {item}; the {mt.label} plan holds {expected}")
     t.send(m.ack_message(MissionResult.ACCEPTED, mt, t.target))
 
@@ -210,7 +210,7 @@ def other_type_item_not_taken_into_upload(s: Session) -> None:
         # the vehicle refused the mix by ending the upload: the item did not join it
         procedures.require_same_plan(procedures.stored(t, MISSION), old,
                                      f"after the mission upload ended on a FENCE item "
-                                     f"({procedures.result_name(got.type)})")
+                                     f"({procedures.result_name(got.type)})", t.form)
         t.note("the vehicle ended the mission upload on the FENCE item; the old plan is kept")
         return
     if got.seq != k:

@@ -9,15 +9,16 @@ not failed: the clause that owns that behaviour is where it gets judged.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
+from reference_impl.mission.constants import CommandResult, MissionResult
 from reference_impl.mission.items import MissionItem, MissionType
 from reference_impl.wire.frame import Frame
 
 from ..outcome import ClauseFailed, PreconditionFailed
 from .match import Match, ack, msg, request
+from .stored_form import SPEC_FORM, StoredForm, describe_differences
 from .tester import Tester
 
 RETRIES = 5
@@ -36,6 +37,13 @@ def result_name(code: int) -> str:
         return f"MAV_MISSION_{MissionResult(code).name}"
     except ValueError:
         return f"MAV_MISSION_RESULT {code} (not a defined value)"
+
+
+def command_result_name(code: int) -> str:
+    try:
+        return f"MAV_RESULT_{CommandResult(code).name}"
+    except ValueError:
+        return f"MAV_RESULT {code} (not a defined value)"
 
 
 def upload(t: Tester, items: list[MissionItem], mission_type: MissionType, *,
@@ -81,8 +89,9 @@ def serve_upload(t: Tester, items: list[MissionItem], mission_type: MissionType 
     return None
 
 
-def ensure_plan(t: Tester, items: list[MissionItem], mission_type: MissionType) -> None:
-    """Put `items` on the target as its `mission_type` plan, or make the clause undecided."""
+def ensure_plan(t: Tester, items: list[MissionItem], mission_type: MissionType) -> Frame:
+    """Put `items` on the target as its `mission_type` plan (the accepting MISSION_ACK is
+    returned), or make the clause undecided."""
     frame = upload(t, items, mission_type)
     if frame is None:
         raise PreconditionFailed(f"setup: uploading a {len(items)}-item {mission_type.label} plan "
@@ -90,6 +99,24 @@ def ensure_plan(t: Tester, items: list[MissionItem], mission_type: MissionType) 
     if frame.msg.type != MissionResult.ACCEPTED:
         raise PreconditionFailed(f"setup: uploading a {len(items)}-item {mission_type.label} plan "
                                  f"was answered {result_name(frame.msg.type)}")
+    return frame
+
+
+PLAN_TAKEN_WAIT = 3.5   # s: the next 1 Hz MISSION_CURRENT, with room for a busy vehicle
+
+
+def await_plan_taken(t: Tester, accepted: Frame) -> None:
+    """After an accepted mission upload, wait (bounded) until the vehicle says it flies the
+    new plan: a MISSION_CURRENT whose mission_id is the upload's opaque_id. A vehicle takes
+    a new plan in its own time (PX4's navigator reads it after the ACK), and a set-current or
+    mission start sent before that is lost to the race, not to the clause it would judge.
+    Vehicles without plan ids in MISSION_CURRENT are not waited for."""
+    opaque_id = getattr(accepted.msg, "opaque_id", 0)
+    if not opaque_id:
+        return
+    if t.poll_for(msg("MISSION_CURRENT", mission_id=opaque_id), PLAN_TAKEN_WAIT, forced=True) is None:
+        t.note(f"no MISSION_CURRENT reported the new plan (mission_id 0x{opaque_id:08x}) within "
+               f"{PLAN_TAKEN_WAIT * t.scale:g} s; going on")
 
 
 def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Download | None:
@@ -122,13 +149,14 @@ def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Do
         if item is None:
             return None
         items.append(item)
-    if count:
-        t.send(m.ack_message(MissionResult.ACCEPTED, mission_type, t.target))
+    # every download we open is ended, an empty one too: a target that keeps a download
+    # open until the GCS's ACK must not be left holding it
+    t.send(m.ack_message(MissionResult.ACCEPTED, mission_type, t.target))
     return Download(count, items, count_frame)
 
 
 def stored(t: Tester, mission_type: MissionType) -> list[MissionItem]:
-    """The plan on the target, or the clause is undecided."""
+    """The plan on the target (compare it in `t.form`), or the clause is undecided."""
     got = download(t, mission_type)
     if got is None:
         raise PreconditionFailed(f"could not download the {mission_type.label} plan to check it")
@@ -146,37 +174,24 @@ def clear(t: Tester, mission_type: MissionType | int) -> Frame | None:
     return None
 
 
-def comparable(item: MissionItem) -> MissionItem:
-    """An item as a plan comparison sees it: `current` is the vehicle's progress marker on
-    download (seed 000 field table), not part of the plan."""
-    return replace(item, current=0)
+def comparable(item: MissionItem, form: StoredForm = SPEC_FORM) -> MissionItem:
+    """An item as a plan comparison sees it (`StoredForm.canonical`): `current` is the
+    vehicle's progress marker on download (seed 000 field table), not part of the plan."""
+    return form.canonical(item)
 
 
-def same_plan(a: list[MissionItem], b: list[MissionItem]) -> bool:
-    return [comparable(x) for x in a] == [comparable(x) for x in b]
+def same_plan(a: list[MissionItem], b: list[MissionItem], form: StoredForm = SPEC_FORM) -> bool:
+    return form.same(a, b)
 
 
-def require_same_plan(got: list[MissionItem], want: list[MissionItem], what: str) -> None:
-    if not same_plan(got, want):
-        raise ClauseFailed(f"{what}: the target holds {len(got)} items, "
-                           f"{'a different plan' if len(got) == len(want) else f'expected {len(want)}'}"
-                           f"{_first_difference(got, want)}")
-
-
-def _first_difference(got: list[MissionItem], want: list[MissionItem]) -> str:
-    for g, w in zip(got, want):
-        g, w = comparable(g), comparable(w)
-        if g != w:
-            fields = [f for f in ("frame", "command", "param1", "param2", "param3", "param4", "x", "y",
-                                  "z", "autocontinue", "mission_type")
-                      if repr(getattr(g, f)) != repr(getattr(w, f))]
-            shown = ", ".join(f"{f} {_v(getattr(g, f))} (expected {_v(getattr(w, f))})" for f in fields)
-            return f" (first difference at seq {w.seq}: {shown})"
-    return ""
-
-
-def _v(value: object) -> str:
-    return str(int(value)) if isinstance(value, int) else repr(value)
+def require_same_plan(got: list[MissionItem], want: list[MissionItem], what: str,
+                      form: StoredForm = SPEC_FORM) -> None:
+    if form.same(got, want):
+        return
+    diffs = form.differences(got, want)
+    shown = f" (in the target's stored form: {describe_differences(diffs)})" if diffs else ""
+    raise ClauseFailed(f"{what}: the target holds {len(got)} items, "
+                       f"{'a different plan' if len(got) == len(want) else f'expected {len(want)}'}{shown}")
 
 
 def setup_expect(t: Tester, match: Match, what: str) -> Frame:
@@ -194,9 +209,9 @@ def judge_stored(t: Tester, want: list[MissionItem], before: list[MissionItem], 
     """The stored plan must be `want`, the plan just accepted. If it is still `before`, the
     vehicle stores no accepted upload at all: MIS.UP.04's finding, not this clause's."""
     got = stored(t, mission_type)
-    if same_plan(got, want):
+    if t.form.same(got, want):
         return
-    if same_plan(got, before):
+    if t.form.same(got, before):
         raise PreconditionFailed(f"{what}: the vehicle accepted the upload but still holds the plan from "
                                  "before it (MIS.UP.04 judges that)")
-    require_same_plan(got, want, what)
+    require_same_plan(got, want, what, t.form)

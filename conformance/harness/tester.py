@@ -19,6 +19,7 @@ from reference_impl.wire.frame import Frame
 from ..outcome import ClauseFailed, TargetUnresponsive
 from .exchange import Exchange, message_fields, relevant
 from .match import Match
+from .stored_form import SPEC_FORM, StoredForm
 from .tester_node import TesterNode
 
 SPEC = Timings()
@@ -38,10 +39,12 @@ class Tester:
         self.scale = scale
         self.timings = timings
         self.target: tuple[int, int] = node.target or (0, 0)
+        self.form: StoredForm = SPEC_FORM    # how the target keeps plans (set on discovery)
         self.exchange: Exchange | None = None
         self.forced_wait = 0.0
         self._floor = 0
         self._consumed: set[int] = set()   # ids of matched frames past the floor
+        self.touched_types: set[int] = set()   # every mission_type sent, invalid ones too (cleanup)
 
     # --- time -----------------------------------------------------------------------------
     def now(self) -> float:
@@ -67,6 +70,9 @@ class Tester:
         self._consumed.clear()
 
     def send(self, msg: Any) -> None:
+        mission_type = getattr(msg, "mission_type", None)
+        if mission_type is not None:
+            self.touched_types.add(mission_type)
         self.node.send(msg)
         self.driver.run_until(_always, timeout=0.0)   # flush it now, and take in what is waiting
 

@@ -1,9 +1,8 @@
 """Mutants with a broken frame decoder: planted bugs for the frame fuzzer to find.
 
-The conformance clauses judge the target's behaviour on well-formed traffic, which this
-mutant handles exactly like the spec vehicle, so it breaks no clause: it exists to show
-that `mavconform fuzz --mode frames` finds what the clause suite cannot see (the frame
-fuzzer's tests assert that it is found, shrunk to a truncated frame, and replayed).
+It handles well-formed traffic exactly like the spec vehicle. The frame fuzzer finds it,
+shrinks it to a truncated frame and replays it (its tests assert that); of the clauses only
+MIS.FRM.05 sends a truncated frame, and fails on the crash.
 """
 
 from __future__ import annotations
@@ -35,4 +34,4 @@ class _TrustsLengthByte(VehicleNode):
 
 
 mutant("raises-on-truncated-frame", "its frame decoder raises on a truncated frame (a planted bug for the "
-       "frame fuzzer; no conformance clause sends one)", set(), vehicle_mutant(_TrustsLengthByte))
+       "frame fuzzer; MIS.FRM.05 sends one too)", {"MIS.FRM.05"}, vehicle_mutant(_TrustsLengthByte))

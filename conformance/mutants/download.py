@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from reference_impl.mission import messages as m
 from reference_impl.mission.actions import Send
 from reference_impl.mission.constants import MissionResult
@@ -100,3 +102,15 @@ mutant("ignores-download-final-ack", "keeps a download open after the GCS's fina
        {"MIS.DN.07", "MIS.IDL.01"}, server_mutant(_IgnoresFinalAck))
 mutant("ignores-download-error-ack", "keeps a download open after an error MISSION_ACK other than "
        "OPERATION_CANCELLED", {"MIS.DN.08"}, server_mutant(_IgnoresErrorAck))
+
+
+class _NeverFlagsCurrent(MissionServer):
+    """Serves every downloaded item with current=0, whichever item is current."""
+
+    def _download_item(self, t, seq):
+        item = super()._download_item(t, seq)
+        return replace(item, current=0) if item.current else item
+
+
+mutant("never-flags-current", "serves every downloaded item with current=0, the current one too",
+       {"MIS.DN.09"}, server_mutant(_NeverFlagsCurrent))

@@ -63,3 +63,33 @@ mutant("repeats-packet-seq", "every 8th frame repeats the packet sequence number
        {"MIS.FRM.03"}, vehicle_mutant(_RepeatsPacketSeq))
 mutant("heartbeat-once", "sends one HEARTBEAT at start-up and no more",
        {"MIS.FRM.04"}, vehicle_mutant(_HeartbeatOnce))
+
+
+_MAGIC_V2, _V2_OVERHEAD = 0xFD, 12
+
+
+class _IgnoresChecksum(VehicleNode):
+    """Acts on a frame whatever its checksum says (the checksum is made right before the
+    frame is decoded)."""
+
+    def datagram_received(self, data, source, now):
+        if len(data) > 10 and data[0] == _MAGIC_V2 and not data[2] & 1 and len(data) == data[1] + _V2_OVERHEAD:
+            from fuzz.frames import wire
+            data = wire.rechecksum(data)
+        super().datagram_received(data, source, now)
+
+
+class _PadsTruncatedFrames(VehicleNode):
+    """Takes a frame cut short as if its missing bytes were zeros (and its checksum right)."""
+
+    def datagram_received(self, data, source, now):
+        if len(data) > 10 and data[0] == _MAGIC_V2 and not data[2] & 1 and len(data) < data[1] + _V2_OVERHEAD:
+            from fuzz.frames import wire
+            data = wire.rechecksum(data.ljust(data[1] + _V2_OVERHEAD, b"\0"))
+        super().datagram_received(data, source, now)
+
+
+mutant("ignores-checksum", "acts on frames whose checksum is wrong",
+       {"MIS.FRM.05"}, vehicle_mutant(_IgnoresChecksum))
+mutant("pads-truncated-frames", "acts on a frame cut short, as if its missing bytes were zeros",
+       {"MIS.FRM.05"}, vehicle_mutant(_PadsTruncatedFrames))

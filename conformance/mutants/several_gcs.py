@@ -6,7 +6,7 @@ from reference_impl.mission import messages as m
 from reference_impl.mission.actions import Send
 from reference_impl.mission.constants import MissionResult
 from reference_impl.mission.server import MissionServer
-from reference_impl.mission.transitions import SlotEvent
+from reference_impl.mission.transitions import SlotEvent, SlotState
 
 from . import mutant, server_mutant
 
@@ -37,3 +37,17 @@ mutant("denial-aborts-transfer", "when it denies another GCS, also cancels the t
        {"MIS.GCS.02"}, server_mutant(_DenialAbortsTransfer))
 mutant("ignores-target-system", "acts on mission messages addressed to any system",
        {"MIS.GCS.03"}, server_mutant(_IgnoresTargetSystem))
+
+
+class _AnyAckEndsDownload(MissionServer):
+    """Takes a MISSION_ACK from any GCS as the end of the running download."""
+
+    def _on_ack(self, msg, src, now):
+        t = self._plan_type(msg.mission_type)
+        if t is not None and self.state(t) is SlotState.SENDING and self.partner(t) != src:
+            src = self.partner(t)   # as if the downloading GCS had sent it
+        return super()._on_ack(msg, src, now)
+
+
+mutant("any-ack-ends-download", "ends a running download on a MISSION_ACK from any GCS, not only the "
+       "one downloading", {"MIS.GCS.04"}, server_mutant(_AnyAckEndsDownload))

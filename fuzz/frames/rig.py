@@ -146,7 +146,8 @@ class Rig:
         wall = self.clock.wall
         if uri.in_process:
             keyed = {"signing": SigningKey(self.key), "require_signature": True} if self.key else {}
-            self.vehicle = build_vehicle(uri, wall_clock=wall, **keyed)
+            # the fuzzed frames and the oracle GCS come from addresses of their own
+            self.vehicle = build_vehicle(uri, wall_clock=wall, single_peer_link=False, **keyed)
             self.guard = GuardedNode(self.vehicle)
             self.counted = _Counted(self.guard)
             gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],

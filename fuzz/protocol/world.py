@@ -117,7 +117,10 @@ class World:
 
     def _open_sim(self, capture: CaptureHook | None) -> None:
         net = self.driver = SimNetwork(self.seed)
-        self.vehicle = build_vehicle(self.uri)
+        # Each fuzz GCS (a, b, the mute one, the probe) has an address of its own here, so the
+        # vehicle must read them all: a profile's single-peer link (VARIANTS.md L1/L2) would
+        # hear only the first. Several identities on one link is the UDP fuzzer's to learn.
+        self.vehicle = build_vehicle(self.uri, single_peer_link=False)
         cfg = self.vehicle.config
         target = (cfg.system, cfg.component)
         self.a = self._gcs(SYSTEM_A, target, heartbeat=False)

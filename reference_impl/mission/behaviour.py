@@ -64,6 +64,16 @@ class ServerBehaviour:
     give_up_statustext: str = ""
     # A MISSION_ACK from the GCS (e.g. OPERATION_CANCELLED) ends its running upload.
     honour_cancel_upload: bool = True
+    # ...and so does one with any other error code (False: only OPERATION_CANCELLED does;
+    # other codes are ignored and the vehicle goes on requesting).
+    error_ack_ends_upload: bool = True
+    # The MISSION_ACK a GCS gets when another GCS's transfer holds the plan type.
+    busy_reply: MissionResult = MissionResult.DENIED
+    # MISSION_REQUEST_LIST for a mission_type that is no plan type is answered MISSION_COUNT 0
+    # (False: MISSION_ACK UNSUPPORTED).
+    unknown_type_count0: bool = False
+    # MAV_CMD_DO_SET_MISSION_CURRENT is handled (False: answered MAV_RESULT_UNSUPPORTED).
+    set_current_command: bool = True
     # An item of another plan type, sent by the partner of a running upload, is answered
     # with this MISSION_ACK (for the running transfer's type); None: treated as a stray.
     foreign_type_item_reply: MissionResult | None = None
@@ -94,6 +104,9 @@ class ServerBehaviour:
     # (altitude in whole cm, hold time in whole seconds, other waypoint params dropped,
     # rally altitude in whole metres, *_INT frames reported as their plain frames).
     item_storage: str = "exact"
+    # A downloaded mission item carries current=1 exactly when it is the current item
+    # (False: the flag is 0 on every item, whatever is current).
+    download_current_flag: bool = True
     # Report plan ids (opaque_id, MISSION_CURRENT mission_id/fence_id/rally_points_id).
     # False: the older dialect without them (the fields go out as zero, which MAVLink 2's
     # trailing-zero truncation makes byte-identical to a frame without the fields).

@@ -22,7 +22,7 @@ that changed what it did, and its result lists them.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 from ..errors import LocalProtocolError
@@ -354,8 +354,12 @@ class MissionClient:
         if op.expected < op.count:
             return self._request_expected(op, now)
         ack = self._to_target(m.ack_message(MissionResult.ACCEPTED, op.mission_type, self.target))
-        items = op.items[op.home:] if op.home else op.items   # drop the vehicle's home
-        return [ack] + self._finish(now, Outcome.SUCCESS, items=tuple(renumber(items)))
+        items = renumber(op.items[op.home:] if op.home else op.items)   # drop the vehicle's home
+        # `current` is the vehicle's progress marker (seed 000 field table), not the plan's:
+        # the plan comes back without it, and which item was current is said beside it
+        current = next((it.seq for it in items if it.current), None)
+        plan = tuple(replace(it, current=0) if it.current else it for it in items)
+        return [ack] + self._finish(now, Outcome.SUCCESS, items=plan, current_seq=current)
 
     def _on_ack(self, op: _Op, msg: Any, now: float) -> list[Action]:
         if op.operation is Operation.SET_CURRENT:
@@ -558,7 +562,7 @@ class MissionClient:
 
     def _finish(self, now: float, outcome: Outcome, *, items: tuple | None = None,
                 opaque_id: int | None = None, nack: Any = None, detail: str = "",
-                unknown: bool = False) -> list[Action]:
+                unknown: bool = False, current_seq: int | None = None) -> list[Action]:
         op = self._op
         assert op is not None
         self._move(_E.FINISH)
@@ -566,7 +570,7 @@ class MissionClient:
         self.used.update(dict.fromkeys(op.used))
         result = OperationResult(
             operation=op.operation, mission_type=op.mission_type, outcome=outcome,
-            items=items, opaque_id=op.opaque_id if opaque_id is None else opaque_id,
+            items=items, current_seq=current_seq, opaque_id=op.opaque_id if opaque_id is None else opaque_id,
             nack=nack, retries=op.retries, max_consecutive_retries=op.max_consecutive,
             outcome_unknown=unknown, detail=detail, started=op.started, finished=now,
             adaptations=tuple(op.used))

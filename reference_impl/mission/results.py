@@ -39,7 +39,8 @@ class OperationResult:
     operation: Operation
     mission_type: MissionType
     outcome: Outcome
-    items: tuple[MissionItem, ...] | None = None   # download: what was received
+    items: tuple[MissionItem, ...] | None = None   # download: the plan received (`current` cleared)
+    current_seq: int | None = None                  # download: the plan seq the vehicle flagged current
     opaque_id: int = 0                              # upload: id in the final ACK; download: from COUNT
     nack: MissionResult | int | None = None         # the error code of a NACK
     retries: int = 0                                # timeout-driven resends during the operation

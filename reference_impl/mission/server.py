@@ -23,7 +23,7 @@ knob read here; moves only a knob makes are in `PROFILE_TRANSITIONS`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..errors import LocalProtocolError
@@ -266,6 +266,8 @@ class MissionServer:
         return out + self._commit(t, items, src, now)
 
     def _on_request_list(self, msg: Any, src: Peer, now: float) -> list[Send]:
+        if self.behaviour.unknown_type_count0 and msg.mission_type not in PLAN_TYPE_BY_VALUE:
+            return [Send(m.count_message(0, msg.mission_type, src), src)]
         slot, refusal = self._slot_for(msg, src, read=True)
         if refusal is not None:
             return refusal
@@ -332,7 +334,8 @@ class MissionServer:
             slot.as_int = not slot.as_int
             self._move(slot, SlotEvent.FORM_FLIPPED)
             return [Send(self._request_msg(slot), slot.partner)]
-        elif msg.type != MissionResult.ACCEPTED and self.behaviour.honour_cancel_upload:
+        elif msg.type != MissionResult.ACCEPTED and self.behaviour.honour_cancel_upload and (
+                msg.type == MissionResult.OPERATION_CANCELLED or self.behaviour.error_ack_ends_upload):
             # Seed 000: an error ACK "must cancel the operation and restore the mission".
             self._move(slot, SlotEvent.ACK)
             self.stats.uploads_failed += 1
@@ -450,10 +453,15 @@ class MissionServer:
 
     def _download_item(self, t: MissionType, seq: int) -> MissionItem:
         """Stored item `seq` as a download serves it: item 0 of a mission is the vehicle's
-        home when the plan holds it there (A1)."""
+        home when the plan holds it there (A1); `current` says whether it is the current
+        mission item (seed 000 field table), whatever the uploading GCS put there."""
         if seq == 0 and t is MissionType.MISSION and self.behaviour.home_at_seq0:
-            return self._keep(self.home)
-        return self.store.items(t)[seq]
+            item = self._keep(self.home)
+        else:
+            item = self.store.items(t)[seq]
+        current = int(t is MissionType.MISSION and seq == self.progress.seq
+                      and self.behaviour.download_current_flag)
+        return item if item.current == current else replace(item, current=current)
 
     def _opaque_id(self, t: MissionType) -> int:
         return self.store.opaque_id(t) if self.behaviour.opaque_id_fields else 0
@@ -539,7 +547,7 @@ class MissionServer:
 
     def _deny(self, t: MissionType, src: Peer) -> list[Send]:
         self.stats.denied += 1
-        return [Send(m.ack_message(MissionResult.DENIED, t, src), src)]
+        return [Send(m.ack_message(self.behaviour.busy_reply, t, src), src)]
 
     def _unsupported(self, raw_type: int, src: Peer) -> list[Send]:
         return [Send(m.ack_message(MissionResult.UNSUPPORTED, raw_type, src), src)]

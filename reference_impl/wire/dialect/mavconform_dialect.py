@@ -796,6 +796,30 @@ enums["NAV_TAKEOFF_FLAGS"][1] = EnumEntry("NAV_TAKEOFF_FLAGS_HORIZONTAL_POSITION
 NAV_TAKEOFF_FLAGS_ENUM_END = 2
 enums["NAV_TAKEOFF_FLAGS"][2] = EnumEntry("NAV_TAKEOFF_FLAGS_ENUM_END", """""")
 
+# MAV_DATA_STREAM
+enums["MAV_DATA_STREAM"] = Enum()
+enums["MAV_DATA_STREAM"].bitmask = False
+MAV_DATA_STREAM_ALL = 0
+enums["MAV_DATA_STREAM"][0] = EnumEntry("MAV_DATA_STREAM_ALL", """""")
+MAV_DATA_STREAM_RAW_SENSORS = 1
+enums["MAV_DATA_STREAM"][1] = EnumEntry("MAV_DATA_STREAM_RAW_SENSORS", """""")
+MAV_DATA_STREAM_EXTENDED_STATUS = 2
+enums["MAV_DATA_STREAM"][2] = EnumEntry("MAV_DATA_STREAM_EXTENDED_STATUS", """""")
+MAV_DATA_STREAM_RC_CHANNELS = 3
+enums["MAV_DATA_STREAM"][3] = EnumEntry("MAV_DATA_STREAM_RC_CHANNELS", """""")
+MAV_DATA_STREAM_RAW_CONTROLLER = 4
+enums["MAV_DATA_STREAM"][4] = EnumEntry("MAV_DATA_STREAM_RAW_CONTROLLER", """""")
+MAV_DATA_STREAM_POSITION = 6
+enums["MAV_DATA_STREAM"][6] = EnumEntry("MAV_DATA_STREAM_POSITION", """""")
+MAV_DATA_STREAM_EXTRA1 = 10
+enums["MAV_DATA_STREAM"][10] = EnumEntry("MAV_DATA_STREAM_EXTRA1", """""")
+MAV_DATA_STREAM_EXTRA2 = 11
+enums["MAV_DATA_STREAM"][11] = EnumEntry("MAV_DATA_STREAM_EXTRA2", """""")
+MAV_DATA_STREAM_EXTRA3 = 12
+enums["MAV_DATA_STREAM"][12] = EnumEntry("MAV_DATA_STREAM_EXTRA3", """""")
+MAV_DATA_STREAM_ENUM_END = 13
+enums["MAV_DATA_STREAM"][13] = EnumEntry("MAV_DATA_STREAM_ENUM_END", """""")
+
 # MAV_CMD
 enums["MAV_CMD"] = Enum()
 enums["MAV_CMD"].bitmask = False
@@ -1179,6 +1203,7 @@ MAVLINK_MSG_ID_MISSION_CLEAR_ALL = 45
 MAVLINK_MSG_ID_MISSION_ITEM_REACHED = 46
 MAVLINK_MSG_ID_MISSION_ACK = 47
 MAVLINK_MSG_ID_MISSION_REQUEST_INT = 51
+MAVLINK_MSG_ID_REQUEST_DATA_STREAM = 66
 MAVLINK_MSG_ID_MISSION_ITEM_INT = 73
 MAVLINK_MSG_ID_COMMAND_INT = 75
 MAVLINK_MSG_ID_COMMAND_LONG = 76
@@ -1797,6 +1822,50 @@ class MAVLink_mission_request_int_message(MAVLink_message):
 setattr(MAVLink_mission_request_int_message, "name", mavlink_msg_deprecated_name_property())
 
 
+class MAVLink_request_data_stream_message(MAVLink_message):
+    """
+    Ask for a group of messages at a rate: the older way to start
+    streams, still what ArduPilot-era GCSs fall back to when
+    MAV_CMD_SET_MESSAGE_INTERVAL is refused.
+    """
+
+    id = MAVLINK_MSG_ID_REQUEST_DATA_STREAM
+    msgname = "REQUEST_DATA_STREAM"
+    fieldnames = ["target_system", "target_component", "req_stream_id", "req_message_rate", "start_stop"]
+    ordered_fieldnames = ["req_message_rate", "target_system", "target_component", "req_stream_id", "start_stop"]
+    fieldtypes = ["uint8_t", "uint8_t", "uint8_t", "uint16_t", "uint8_t"]
+    fielddisplays_by_name: Dict[str, str] = {}
+    fieldenums_by_name: Dict[str, str] = {"req_stream_id": "MAV_DATA_STREAM"}
+    fieldunits_by_name: Dict[str, str] = {"req_message_rate": "Hz"}
+    native_format = bytearray(b"<HBBBB")
+    orders = [1, 2, 3, 0, 4]
+    lengths = [1, 1, 1, 1, 1]
+    array_lengths = [0, 0, 0, 0, 0]
+    crc_extra = 148
+    unpacker = struct.Struct("<HBBBB")
+    instance_field = None
+    instance_offset = -1
+
+    def __init__(self, target_system: int, target_component: int, req_stream_id: int, req_message_rate: int, start_stop: int):
+        MAVLink_message.__init__(self, MAVLink_request_data_stream_message.id, MAVLink_request_data_stream_message.msgname)
+        self._fieldnames = MAVLink_request_data_stream_message.fieldnames
+        self._instance_field = MAVLink_request_data_stream_message.instance_field
+        self._instance_offset = MAVLink_request_data_stream_message.instance_offset
+        self.target_system = target_system
+        self.target_component = target_component
+        self.req_stream_id = req_stream_id
+        self.req_message_rate = req_message_rate
+        self.start_stop = start_stop
+
+    def pack(self, mav: "MAVLink", force_mavlink1: bool = False) -> bytes:
+        return self._pack(mav, self.crc_extra, self.unpacker.pack(self.req_message_rate, self.target_system, self.target_component, self.req_stream_id, self.start_stop), force_mavlink1=force_mavlink1)
+
+
+# Define name on the class for backwards compatibility (it is now msgname).
+# Done with setattr to hide the class variable from mypy.
+setattr(MAVLink_request_data_stream_message, "name", mavlink_msg_deprecated_name_property())
+
+
 class MAVLink_mission_item_int_message(MAVLink_message):
     """
     One plan item, with x and y as scaled integers (degrees * 1E7 in
@@ -2136,6 +2205,7 @@ mavlink_map: Dict[int, Type[MAVLink_message]] = {
     MAVLINK_MSG_ID_MISSION_ITEM_REACHED: MAVLink_mission_item_reached_message,
     MAVLINK_MSG_ID_MISSION_ACK: MAVLink_mission_ack_message,
     MAVLINK_MSG_ID_MISSION_REQUEST_INT: MAVLink_mission_request_int_message,
+    MAVLINK_MSG_ID_REQUEST_DATA_STREAM: MAVLink_request_data_stream_message,
     MAVLINK_MSG_ID_MISSION_ITEM_INT: MAVLink_mission_item_int_message,
     MAVLINK_MSG_ID_COMMAND_INT: MAVLink_command_int_message,
     MAVLINK_MSG_ID_COMMAND_LONG: MAVLink_command_long_message,
@@ -2944,6 +3014,36 @@ class MAVLink(object):
 
         """
         self.send(self.mission_request_int_encode(target_system, target_component, seq, mission_type), force_mavlink1=force_mavlink1)
+
+    def request_data_stream_encode(self, target_system: int, target_component: int, req_stream_id: int, req_message_rate: int, start_stop: int) -> MAVLink_request_data_stream_message:
+        """
+        Ask for a group of messages at a rate: the older way to start streams,
+        still what ArduPilot-era GCSs fall back to when
+        MAV_CMD_SET_MESSAGE_INTERVAL is refused.
+
+        target_system             : System that should send the stream. (type:uint8_t)
+        target_component          : Component that should send the stream. (type:uint8_t)
+        req_stream_id             : MAV_DATA_STREAM id of the group (2: extended status, 6: position). (type:uint8_t, values:MAV_DATA_STREAM)
+        req_message_rate          : Rate asked for. [Hz] (type:uint16_t)
+        start_stop                : 1 to start sending, 0 to stop. (type:uint8_t)
+
+        """
+        return MAVLink_request_data_stream_message(target_system, target_component, req_stream_id, req_message_rate, start_stop)
+
+    def request_data_stream_send(self, target_system: int, target_component: int, req_stream_id: int, req_message_rate: int, start_stop: int, force_mavlink1: bool = False) -> None:
+        """
+        Ask for a group of messages at a rate: the older way to start streams,
+        still what ArduPilot-era GCSs fall back to when
+        MAV_CMD_SET_MESSAGE_INTERVAL is refused.
+
+        target_system             : System that should send the stream. (type:uint8_t)
+        target_component          : Component that should send the stream. (type:uint8_t)
+        req_stream_id             : MAV_DATA_STREAM id of the group (2: extended status, 6: position). (type:uint8_t, values:MAV_DATA_STREAM)
+        req_message_rate          : Rate asked for. [Hz] (type:uint16_t)
+        start_stop                : 1 to start sending, 0 to stop. (type:uint8_t)
+
+        """
+        self.send(self.request_data_stream_encode(target_system, target_component, req_stream_id, req_message_rate, start_stop), force_mavlink1=force_mavlink1)
 
     def mission_item_int_encode(self, target_system: int, target_component: int, seq: int, frame: int, command: int, current: int, autocontinue: int, param1: float, param2: float, param3: float, param4: float, x: int, y: int, z: float, mission_type: int = 0) -> MAVLink_mission_item_int_message:
         """

@@ -1,0 +1,138 @@
+"""How a target keeps plans: the equivalences every plan comparison allows.
+
+A clause judges only its own behaviour. Two things a target may do to every plan must
+therefore never decide an unrelated clause:
+- documented equivalences: upstream common.xml supersedes the `*_INT` frames (5, 6, 11) as
+  synonymous with the plain ones (0, 3, 10), and PX4 returns one for the other (VARIANTS.md
+  L3); params upstream marks "Reserved" carry nothing (a fence vertex has no altitude, so
+  neither has the altitude reference of its frame: PX4 keeps its own); `autocontinue` is a
+  flight-sequence flag that fence and rally items do not have (PX4's fence record has no
+  such field); a downloaded item's `current` flag is the vehicle's progress marker;
+- the target's storage: ArduPilot keeps home in mission slot 0 (A1: an uploaded item 0 is
+  not kept, `AP_Mission::replace_cmd(0)` returns without writing, and a read of index 0
+  returns home) and stores items in a compact record that rounds or drops some params (A13).
+MIS.UP.04 owns A1 and compares item 0 too (`strict()`); everywhere else a plan is compared
+in the target's stored form, and a mismatch names every field that differs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, Sequence
+
+from reference_impl.mission.items import MissionItem, MissionType
+from reference_impl.mission.store import STORAGE_FORMS
+
+# upstream common.xml MAV_FRAME: "Use MAV_FRAME_GLOBAL... as a synonymous replacement"
+FRAME_SYNONYMS = {5: 0, 6: 3, 11: 10}
+MAX_LISTED = 8          # differences listed in one verdict; the rest are counted
+_FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z",
+           "autocontinue", "mission_type")
+_AUTOPILOT_PROFILE = {3: "ardupilot", 12: "px4"}   # HEARTBEAT.autopilot -> builtin profile
+# upstream common.xml: the params of each plan-type command marked "Reserved" (1-4; 7 is z)
+RESERVED_PARAMS = {
+    5001: (3, 4, 7),        # MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
+    5002: (2, 3, 4, 7),     # MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION
+    5003: (3, 4, 7),        # MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
+    5004: (2, 3, 4, 7),     # MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION
+    5100: (1, 2, 3, 4),     # MAV_CMD_NAV_RALLY_POINT
+}
+_PARAM_FIELD = {1: "param1", 2: "param2", 3: "param3", 4: "param4", 7: "z"}
+_GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})
+
+
+@dataclass(frozen=True)
+class StoredForm:
+    home_at_seq0: bool = False     # mission slot 0 holds the vehicle's home, whatever was uploaded
+    storage: str = "exact"         # reference_impl.mission.store.STORAGE_FORMS key
+    basis: str = "the spec"        # where this came from, for the report
+
+    def first_flown(self, mission_type: MissionType | int = MissionType.MISSION) -> int:
+        """The first seq of a plan that is the GCS's own (1 where slot 0 is home)."""
+        return 1 if self.home_slot_of(mission_type) else 0
+
+    def home_slot_of(self, mission_type: MissionType | int) -> bool:
+        return self.home_at_seq0 and int(mission_type) == int(MissionType.MISSION)
+
+    def strict(self) -> "StoredForm":
+        """The same form, but item 0 compared too (the clause that owns A1 uses it)."""
+        return replace(self, home_at_seq0=False)
+
+    # --- comparison -------------------------------------------------------------------------
+    def _compared(self, item: MissionItem) -> bool:
+        return not (item.seq == 0 and self.home_slot_of(item.mission_type))
+
+    def canonical(self, item: MissionItem) -> MissionItem:
+        """An item as any comparison sees it: stored form, plain frame, no `current` flag,
+        reserved params and flags the item type does not have left out."""
+        kept = STORAGE_FORMS[self.storage](item)
+        frame = FRAME_SYNONYMS.get(kept.frame, kept.frame)
+        changes: dict[str, Any] = {"current": 0, "frame": frame}
+        reserved = RESERVED_PARAMS.get(int(kept.command), ())
+        for index in reserved:
+            changes[_PARAM_FIELD[index]] = 0.0
+        if 7 in reserved and frame in _GLOBAL_FRAMES:
+            changes["frame"] = 0    # no altitude: the altitude reference means nothing
+        if int(kept.mission_type) != int(MissionType.MISSION):
+            changes["autocontinue"] = 0
+        return replace(kept, **changes)
+
+    def same(self, got: Sequence[MissionItem], want: Sequence[MissionItem]) -> bool:
+        if len(got) != len(want):
+            return False
+        canonical, compared = self.canonical, self._compared
+        return all(canonical(g) == canonical(w) for g, w in zip(got, want) if compared(w))
+
+    def differences(self, got: Sequence[MissionItem], want: Sequence[MissionItem]) -> list[str]:
+        """Every field that differs, item by item, in the stored form ("" items when equal)."""
+        out = []
+        for g, w in zip(got, want):
+            if not self._compared(w):
+                continue
+            cg, cw = self.canonical(g), self.canonical(w)
+            if cg == cw:
+                continue
+            fields = [f for f in _FIELDS if _differs(getattr(cg, f), getattr(cw, f))]
+            shown = ", ".join(f"{f} {_v(getattr(g, f))} (expected {_v(getattr(w, f))})" for f in fields)
+            out.append(f"seq {w.seq}: {shown}")
+        return out
+
+    def describe(self) -> str:
+        parts = []
+        if self.home_at_seq0:
+            parts.append("home in mission slot 0")
+        if self.storage != "exact":
+            parts.append(f"{self.storage} item storage")
+        return (", ".join(parts) or "plans stored as sent") + f" ({self.basis})"
+
+
+SPEC_FORM = StoredForm()
+
+
+def form_of_behaviour(behaviour: Any, basis: str) -> StoredForm:
+    return StoredForm(behaviour.home_at_seq0, behaviour.item_storage, basis)
+
+
+def form_for_autopilot(autopilot: int | None) -> StoredForm:
+    """The stored form of an external target, from its HEARTBEAT autopilot: the builtin
+    profile of that family holds the facts (one place), the spec otherwise."""
+    name = _AUTOPILOT_PROFILE.get(autopilot) if autopilot is not None else None
+    if name is None:
+        return SPEC_FORM
+    from reference_impl.profiles import load_profile
+    return form_of_behaviour(load_profile(name).behaviour,
+                             f"HEARTBEAT autopilot {autopilot}: the {name} profile")
+
+
+def describe_differences(diffs: list[str]) -> str:
+    listed = "; ".join(diffs[:MAX_LISTED])
+    more = len(diffs) - MAX_LISTED
+    return listed + (f"; and {more} more item(s)" if more > 0 else "")
+
+
+def _differs(a: object, b: object) -> bool:
+    return a != b and not (a != a and b != b)   # NaN equals NaN here, as in item equality
+
+
+def _v(value: object) -> str:
+    return str(int(value)) if isinstance(value, int) else repr(value)
