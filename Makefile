@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test run run-profiles demo fuzz fault-table bench clean
+.PHONY: setup test run run-profiles run-mavsdk demo fuzz fault-table bench clean
 
 setup: $(VENV)/.installed
 
@@ -23,6 +23,29 @@ run-profiles: setup  ## the suite vs builtin:px4 / builtin:ardupilot with their 
 	$(BIN)/mavconform run --target builtin:px4 --expect px4 --report-dir reports/px4 -q
 	$(BIN)/mavconform run --target builtin:ardupilot --expect ardupilot --report-dir reports/ardupilot -q
 
+# run-mavsdk: the one clause left out of the run against MAVSDK, and why (README, "MAVSDK's
+# MissionRawServer"): MIS.UP.16 passes, but its MISSION_COUNT 0 leaves MAVSDK 4.1.0 hung at the
+# next MISSION_ITEM_INT (a use-after-free in ReceiveIncomingMission): every later clause would
+# be undecided. An expectations file cannot list that (the clause passes).
+MAVSDK_SKIP := MIS.UP.16
+MAVSDK_OUT  := reports/mavsdk
+
+$(VENV)/.interop-installed: $(VENV)/.installed
+	$(BIN)/python -m pip install --quiet -e '.[interop]'
+	touch $@
+
+run-mavsdk: $(VENV)/.interop-installed  ## the suite vs MAVSDK's MissionRawServer (tools/mavsdk_vehicle.py) with expectations/mavsdk.toml
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests/interop/test_mavsdk_vehicle.py
+	@mkdir -p $(MAVSDK_OUT); \
+	$(BIN)/python tools/mavsdk_vehicle.py --duration 900 >$(MAVSDK_OUT)/vehicle.out 2>$(MAVSDK_OUT)/vehicle.log & pid=$$!; \
+	trap 'kill $$pid 2>/dev/null; for i in 1 2 3 4 5 6 7 8 9 10; do kill -0 $$pid 2>/dev/null || break; sleep 1; done; kill -9 $$pid 2>/dev/null' EXIT; \
+	for i in $$(seq 100); do grep -q '^listening on' $(MAVSDK_OUT)/vehicle.out && break; kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
+	target=$$(sed -n 's/^listening on \(udp:127\.0\.0\.1:[0-9]*\) .*/\1/p' $(MAVSDK_OUT)/vehicle.out); \
+	if [ -z "$$target" ]; then echo "run-mavsdk: the MAVSDK vehicle did not start:" >&2; cat $(MAVSDK_OUT)/vehicle.log >&2; exit 1; fi; \
+	clauses=$$($(BIN)/python -c "from conformance.catalogue import CLAUSES; skip = set('$(MAVSDK_SKIP)'.split()); print(','.join(c.id for c in CLAUSES if c.id not in skip))"); \
+	echo "run-mavsdk: MAVSDK MissionRawServer at $$target; not run: $(MAVSDK_SKIP)"; \
+	timeout 600 $(BIN)/mavconform run --target $$target --expect mavsdk --clauses "$$clauses" --report-dir $(MAVSDK_OUT) -q
+
 demo: setup          ## reference GCS <-> reference vehicle over lossy UDP loopback
 	$(BIN)/mavconform demo
 
@@ -40,4 +63,4 @@ bench: setup         ## figures, not pass/fail
 	$(BIN)/python bench/frame_fuzz.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot fuzz-findings
+	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot reports/mavsdk fuzz-findings

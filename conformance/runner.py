@@ -108,6 +108,7 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     if session._second is not None:
         session._second.exchange = exchange
     begin = session.t.now()
+    began_at = len(session.t.node.inbox)
     session.current_clause = clause.id
     try:
         fn(session)
@@ -137,19 +138,25 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     events = exchange.finish(end)
     for t in session.testers():
         t.exchange = None
-    _settle(session)
+    _settle(session, began_at)
     return ClauseResult(clause.id, outcome, detail, round(end - begin, 6), events)
 
 
 SETTLE_QUIET = 0.005   # s without a frame that counts as "the target has finished replying"
 SETTLE_ROUNDS = 40
+LET_GO_QUIET = 1.5     # s without an item request: the target has let its upload go
+LET_GO_MAX = 12.0      # s at most (the longest vehicle-side upload timeout seen: ArduPilot's 8 s)
+REQUESTS = ("MISSION_REQUEST", "MISSION_REQUEST_INT")
 
 
-def _settle(session: Session) -> None:
+def _settle(session: Session, clause_began: int) -> None:
     """Leave the target idle for the next clause: cancel whatever may be open, for every
     plan type a tester has used (an invalid one too: a target may have opened a transfer
     for it), then let its last replies arrive (a few ms on loopback), so none is taken for
-    the next clause's."""
+    the next clause's. If the clause left an upload open (the last transfer message the
+    target sent it was an item request), a target that ignores the cancel and goes on
+    requesting (ArduPilot, MAVSDK) is waited for, bounded, until it lets the upload go:
+    otherwise its requests meet the next clause, which a busy vehicle refuses or drops."""
     for t in session.testers():
         for mt in sorted(set(map(int, PLAN_TYPES)) | t.touched_types):
             t.node.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mt, t.target))
@@ -160,6 +167,53 @@ def _settle(session: Session) -> None:
         session.driver.run_until(lambda: len(inbox) > seen, timeout=SETTLE_QUIET * session.scale)
         if len(inbox) == seen:
             break
+    if _left_an_upload_open(session, clause_began):
+        _await_let_go(session)
+
+
+def _ours(session: Session) -> set[int]:
+    return {t.node.endpoint.system for t in session.testers()}
+
+
+def _left_an_upload_open(session: Session, since: int) -> bool:
+    ours = _ours(session)
+    for _, frame in reversed(session.t.node.inbox[since:]):
+        name = frame.msg._type
+        if (name in REQUESTS or name == "MISSION_ACK") and frame.msg.target_system in ours:
+            return name in REQUESTS
+    return False
+
+
+def _requests_since(session: Session, index: int) -> list:
+    ours = _ours(session)
+    return [f for _, f in session.t.node.inbox[index:]
+            if f.msg._type in REQUESTS and f.msg.target_system in ours]
+
+
+def _await_let_go(session: Session) -> None:
+    """Until no item request has come for a while: half as long again as the target's own
+    retry interval where it has been measured (MIS.UP.07), LET_GO_QUIET before; at most
+    LET_GO_MAX. Each request that still comes gets a cancel of its own."""
+    measured = session.cache.get("silent_upload")
+    quiet = LET_GO_QUIET
+    if measured is not None:
+        times = measured[0].repeated
+        if len(times) >= 2:
+            quiet = min(LET_GO_QUIET, 1.5 * max(b - a for a, b in zip(times, times[1:])) / session.scale)
+    inbox = session.t.node.inbox
+    clock = session.driver.clock
+    opened = clock.now()
+    for _ in range(int(LET_GO_MAX / min(quiet, LET_GO_QUIET)) + 2):   # each round: quiet, or a request
+        if clock.now() - opened >= LET_GO_MAX * session.scale:
+            return
+        seen = len(inbox)
+        session.driver.run_until(lambda: bool(_requests_since(session, seen)), timeout=quiet * session.scale)
+        late = _requests_since(session, seen)
+        if not late:
+            return
+        for frame in late:   # a cancel for each: a vehicle that does honour one stops now
+            t = next(t for t in session.testers() if t.node.endpoint.system == frame.msg.target_system)
+            t.node.send(m.ack_message(MissionResult.OPERATION_CANCELLED, frame.msg.mission_type, t.target))
 
 
 def _still_alive(session: Session) -> bool:

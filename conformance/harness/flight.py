@@ -10,6 +10,9 @@ follows the autopilot family from the HEARTBEAT:
   (ArduCopter's `GCS_MAVLINK_Copter::handle_command_mission_start` needs them so);
 - every other target, PX4 (12) included: MAV_CMD_MISSION_START 0, 0 (PX4's commander
   switches to AUTO_MISSION and arms on it).
+Before the start the first item is made current (MISSION_SET_CURRENT): ArduCopter's
+MISSION_START resumes from the current item (`AP_Mission::start_or_resume`, MIS_RESTART 0),
+which an earlier set-current clause may have left anywhere.
 A step the vehicle answers MAV_RESULT_UNSUPPORTED is one it does not have (our reference
 vehicle needs no arming); a refusal of arming is retried until the vehicle is ready, within
 a bound. After the flight the vehicle is sent home (MAV_CMD_NAV_RETURN_TO_LAUNCH), so the
@@ -20,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from reference_impl.mission import messages as m
 from reference_impl.mission.constants import Cmd, CommandResult
 from reference_impl.mission.items import MissionItem
 from reference_impl.wire.dialect import mavlink as _d
@@ -73,6 +77,12 @@ def flight_plan(t: Tester, n: int) -> list[MissionItem]:
 
 def start(t: Tester, autopilot: int | None) -> None:
     """Get the vehicle flying its mission from the first item; PreconditionFailed if it will not."""
+    first = t.form.first_flown()
+    t.mark()
+    t.send(m.set_current_message(first, t.target))
+    if t.poll_for(msg("MISSION_CURRENT", seq=first), procedures.PLAN_TAKEN_WAIT, forced=True) is None:
+        raise PreconditionFailed(f"flight: after MISSION_SET_CURRENT {first} no MISSION_CURRENT reported "
+                                 f"item {first} current, so the flight would not start at the first item")
     if autopilot == ARDUPILOT:
         _command(t, MAV_CMD_DO_SET_MODE, "set mode GUIDED", MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, COPTER_GUIDED)
         if _arm(t):

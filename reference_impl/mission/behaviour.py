@@ -74,6 +74,8 @@ class ServerBehaviour:
     unknown_type_count0: bool = False
     # MAV_CMD_DO_SET_MISSION_CURRENT is handled (False: answered MAV_RESULT_UNSUPPORTED).
     set_current_command: bool = True
+    # A MISSION_SET_CURRENT that cannot be done draws a STATUSTEXT saying why (False: nothing).
+    set_current_failure_text: bool = True
     # An item of another plan type, sent by the partner of a running upload, is answered
     # with this MISSION_ACK (for the running transfer's type); None: treated as a stray.
     foreign_type_item_reply: MissionResult | None = None

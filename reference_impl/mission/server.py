@@ -380,7 +380,7 @@ class MissionServer:
             return [Send(m.statustext_message(Severity.WARNING, "Set current refused: a transfer is in progress"))]
         count = self.store.count(MissionType.MISSION)
         if not 0 <= msg.seq < count:
-            return self._set_current_failed(msg.seq, count)
+            return self._set_current_failed(msg.seq, count) if self.behaviour.set_current_failure_text else []
         return self.progress.set_current(msg.seq, now)
 
     # --- timers ---------------------------------------------------------------------------

@@ -139,6 +139,8 @@ _KNOBS = (
     Knob("busy_reply", BEHAVIOUR, "busy_reply", _result, "MISSION_ACK for another GCS while a transfer holds the plan type"),
     Knob("unknown_type_count0", BEHAVIOUR, "unknown_type_count0", _bool,
          "MISSION_REQUEST_LIST for an unknown mission_type draws MISSION_COUNT 0 (false: UNSUPPORTED)"),
+    Knob("set_current_failure_text", BEHAVIOUR, "set_current_failure_text", _bool,
+         "a MISSION_SET_CURRENT that cannot be done draws a STATUSTEXT (false: nothing)"),
     Knob("set_current_command", BEHAVIOUR, "set_current_command", _bool,
          "MAV_CMD_DO_SET_MISSION_CURRENT is handled (false: MAV_RESULT_UNSUPPORTED)"),
     Knob("foreign_type_item_reply", BEHAVIOUR, "foreign_type_item_reply", _result_or_none,

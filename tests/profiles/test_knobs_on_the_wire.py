@@ -60,17 +60,21 @@ def test_non_atomic_upload_leaves_a_mix_of_old_and_new():        # A2
     assert list(stored) == [new[0], new[1], old[2]]
 
 
-def test_a_nack_does_not_end_the_upload():                         # A3
+def test_a_sequence_nack_does_not_end_the_upload_but_a_refused_item_does():   # A3 (master)
+    """ArduPilot master, MissionItemProtocol::handle_mission_item: INVALID_SEQUENCE (and
+    DENIED) are sent and the upload goes on; an item replace/append refuses ends it."""
     s = server("ardupilot")
     items = plan(3)
     s.feed(count(3)); s.feed(item(items[0]))
     out = s.feed(item(items[2]))                                 # out of sequence
     assert acks(out) == [(R.INVALID_SEQUENCE, T.MISSION)] and not only(out, "MISSION_REQUEST")
-    out = s.feed(item(replace(items[1], x=1_000_000_000)))       # latitude 100 degrees
-    assert acks(out) == [(R.INVALID_PARAM5_X, T.MISSION)]
     assert [r.seq for r in only(s.advance(1.0), "MISSION_REQUEST")] == [1]   # still asking for 1
     out = s.feed(item(items[1])) + s.feed(item(items[2]))
     assert acks(out) == [(R.ACCEPTED, T.MISSION)]
+    s.feed(count(3)); s.feed(item(items[0]))
+    out = s.feed(item(replace(items[1], x=1_000_000_000)))       # latitude 100 degrees
+    assert acks(out) == [(R.INVALID_PARAM5_X, T.MISSION)]
+    assert not only(s.advance(2.0), "MISSION_REQUEST")           # that ended it
     assert only(s.feed(item(items[1]), OTHER_GCS), "MISSION_ACK")[0].type != R.ACCEPTED
 
 
@@ -262,7 +266,8 @@ def test_px4_repeats_item_reached_ten_times_at_1hz():             # P13
 
 
 def test_every_profile_transition_is_reachable():
-    s = server("ardupilot", follow_gcs_int_mode=True)
+    # nack_ends_upload=False: older ArduPilot (seed 000), the knob's documented alternative
+    s = server("ardupilot", follow_gcs_int_mode=True, nack_ends_upload=False)
     upload(s, plan(3))
     s.feed(d.MAVLink_mission_write_partial_list_message(1, 1, 0, 0, 0))   # PARTIAL_WRITE
     s.feed(item(replace(waypoint(0), x=1_000_000_000)))                  # ITEM_REFUSED_GOES_ON
