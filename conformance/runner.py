@@ -111,8 +111,7 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     began_at = len(session.t.node.inbox)
     session.current_clause = clause.id
     try:
-        fn(session)
-        outcome, detail = Outcome.PASS, ""
+        outcome, detail = Outcome.PASS, fn(session) or ""
     except ClauseFailed as exc:
         outcome, detail = Outcome.FAIL, str(exc)
     except NotApplicable as exc:

@@ -111,6 +111,13 @@ class MavlinkEndpoint:
         for address in self.addresses:
             self._outbox.append((data, address))
 
+    def send_raw(self, data: bytes, to: Peer | None = None) -> None:
+        """Queue bytes as they are (a damaged frame, on purpose) for one peer's address, or
+        every address if that peer's is not known."""
+        address = self.peers.get(to) if to is not None else None
+        for where in [address] if address is not None else list(self.addresses):
+            self._outbox.append((data, where))
+
     def send_all(self, actions: Iterable[Any]) -> list[Any]:
         """Send every `Send` in `actions`; return the other actions (e.g. results)."""
         rest = []

@@ -1,7 +1,7 @@
 """The checks: one function per clause, registered by the clause id it decides.
 
 A check gets the `Session` (its `t` is the scripted GCS) and returns normally when the
-target met the clause; it raises `ClauseFailed` with what it expected and what came,
+target met the clause (a string it returns is a remark kept with the pass, e.g. a race seen); it raises `ClauseFailed` with what it expected and what came,
 `NotApplicable` when the clause is about an optional behaviour the target lacks, or
 `Skipped` when the user has not allowed what it needs. Modules are grouped like the
 catalogue; importing this package registers them all.
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Callable
 if TYPE_CHECKING:
     from ..session import Session
 
-Check = Callable[["Session"], None]
+Check = Callable[["Session"], "str | None"]
 CHECKS: dict[str, Check] = {}
 
 

@@ -237,12 +237,8 @@ def _damaged_frames(t: Tester) -> list[tuple[str, bytes]]:
 
 
 def _send_raw(t: Tester, data: bytes, what: str) -> None:
-    """`data` to the target as one datagram, as the tester's messages go (the tester node
-    sends messages only, so the bytes go into its endpoint's outbox directly)."""
-    endpoint = t.node.endpoint
-    address = endpoint.peers.get(t.target)
-    for to in [address] if address is not None else list(endpoint.addresses):
-        endpoint._outbox.append((data, to))
+    """`data` to the target as one datagram, where the tester's messages go."""
+    t.node.endpoint.send_raw(data, t.target)
     t.note(f"raw datagram: {what} ({len(data)} bytes {data[:12].hex()}...)")
     t.driver.run_until(lambda: True, timeout=0.0)
 

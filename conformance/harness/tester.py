@@ -91,7 +91,7 @@ class Tester:
         if found is None:
             self.note(f"expected {match} within {within:g} s: nothing matching arrived")
             self._check_alive()
-            raise ClauseFailed(f"expected {match} within {within:g} s; {self._last_seen()}")
+            raise ClauseFailed(f"expected {match} within {within:g} s; {self.last_seen()}")
         return found
 
     def poll_for(self, match: Match, within: float, *, forced: bool = False) -> Frame | None:
@@ -204,7 +204,8 @@ class Tester:
                 "the target sent nothing at all" if heard is None
                 else f"the target has sent nothing for {self.now() - heard:.1f} s")
 
-    def _last_seen(self) -> str:
+    def last_seen(self) -> str:
+        """The last mission message received since the floor, for a verdict's detail."""
         inbox = self.node.inbox
         for i in range(len(inbox) - 1, self._floor - 1, -1):
             frame = inbox[i][1]
