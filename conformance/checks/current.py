@@ -138,8 +138,9 @@ def set_current_is_broadcast(s: Session) -> None:
     t2.mark()
     mine, remark = _set_current_and_see(t, 2)
     if mine is None:
-        raise PreconditionFailed("MISSION_SET_CURRENT 2 (and its resend) drew no MISSION_CURRENT{seq=2} "
-                                 "for the requesting GCS (MIS.CUR.01 judges that)")
+        t.check_alive()
+        raise ClauseFailed("neither MISSION_SET_CURRENT 2 nor its resend drew a MISSION_CURRENT{seq=2}, "
+                           "for the requesting GCS or any other; expected one broadcast")
     other = t2.poll_for(_current_is(2), BROADCAST_LAG)
     if other is None:
         raise ClauseFailed(f"the requesting GCS got MISSION_CURRENT seq {mine.msg.seq}, but another "
