@@ -15,7 +15,7 @@ from reference_impl.mission.items import MissionItem, MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, ack, msg, request
-from ..harness.sentinel import answers_before_sentinel
+from ..harness.sentinel import answers_before_sentinel, brief
 from ..harness.tester import Tester
 from ..outcome import ClauseFailed, PreconditionFailed
 from ..session import Session
@@ -39,12 +39,6 @@ def _partial_upload(t: Tester, items: list[MissionItem], answered: int) -> None:
         procedures.setup_expect(t, request(seq, mission_type=MT), "an upload runs")
         t.send(m.item_message(items[seq], t.target))
     procedures.setup_expect(t, request(answered, mission_type=MT), "an upload runs")
-
-
-def _show(got) -> str:
-    shown = ", ".join(f"{k}={getattr(got, k)}" for k in ("seq", "count", "type", "mission_type")
-                      if hasattr(got, k))
-    return f"{got._type}{{{shown}}}"
 
 
 @check("MIS.IDL.01")
@@ -81,10 +75,10 @@ def _judge_stray_answers(t: Tester, what: str) -> None:
             raise ClauseFailed(f"{what} in idle was answered MISSION_ACK ACCEPTED; expected no answer or "
                                "an error MISSION_ACK")
         if got._type in ITEMS:
-            raise ClauseFailed(f"{what} in idle was answered {_show(got)}, as if a download were running; "
+            raise ClauseFailed(f"{what} in idle was answered {brief(got)}, as if a download were running; "
                                "expected no answer or an error MISSION_ACK")
         if got._type in ("MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_COUNT"):
-            raise ClauseFailed(f"{what} in idle drew {_show(got)}: the vehicle took it as part of a "
+            raise ClauseFailed(f"{what} in idle drew {brief(got)}: the vehicle took it as part of a "
                                "transfer; expected no answer or an error MISSION_ACK")
 
 

@@ -209,7 +209,7 @@ def heartbeat_is_regular(s: Session) -> None:
 
 import time  # noqa: E402  (appended section: the imports above are shared)
 
-from ..harness.sentinel import answers_before_sentinel  # noqa: E402
+from ..harness.sentinel import answers_before_sentinel, brief  # noqa: E402
 from ..outcome import TargetUnresponsive  # noqa: E402
 
 BAD_CRC_FLIP = 0x5A5A      # XORed into the checksum (fuzz.frames.mutators.bad_crc)
@@ -291,11 +291,8 @@ def damaged_frames_not_acted_on(s: Session) -> None:
     except TargetUnresponsive as exc:
         raise _silenced(s, f"after the damaged frames the target fell silent: {exc}") from None
     if replies:
-        reply = replies[0].msg
-        shown = ", ".join(f"{k}={getattr(reply, k)}" for k in ("seq", "count", "type", "mission_type")
-                          if hasattr(reply, k))
         raise ClauseFailed(f"MISSION_CLEAR_ALL / MISSION_COUNT 0 frames with a bad checksum or cut off "
-                           f"drew {reply._type}{{{shown}}}; expected no answer (a damaged frame is dropped)")
+                           f"drew {brief(replies[0].msg)}; expected no answer (a damaged frame is dropped)")
     if not alive:
         raise _silenced(s, f"no HEARTBEAT came in the {HEARTBEAT_WINDOW * t.scale:g} s after the damaged "
                         "frames; expected the vehicle to go on as before")

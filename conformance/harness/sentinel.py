@@ -31,3 +31,10 @@ def answers_before_sentinel(t: Tester) -> list:
     sentinel = msg("COMMAND_ACK", command=MAV_CMD_REQUEST_MESSAGE)
     seen = t.collect(msg(MISSION_REPLIES), t.timings.default_timeout, stop=sentinel)
     return [f for _, f in seen if not sentinel(f)]
+
+
+def brief(msg) -> str:
+    """A reply as a verdict names it: `MISSION_ACK{type=1, mission_type=0}`."""
+    shown = ", ".join(f"{k}={getattr(msg, k)}" for k in ("seq", "count", "type", "mission_type")
+                      if hasattr(msg, k))
+    return f"{msg._type}{{{shown}}}"
