@@ -132,6 +132,7 @@ def cancel_ends_download(s: Session) -> None:
     t.send(m.request_list_message(MISSION, t.target))
     count = procedures.setup_expect(t, msg("MISSION_COUNT", mission_type=MT), "a download starts").msg.count
     if count == 0:
+        t.send(m.ack_message(MissionResult.ACCEPTED, MISSION, t.target))   # even an empty download is ended
         raise PreconditionFailed("the vehicle reports an empty plan after accepting a 3-item upload, so "
                                  "there is no download to cancel (MIS.UP.04 judges that)")
     t.send(m.request_message(0, MISSION, t.target))
@@ -147,8 +148,7 @@ def cancel_ends_download(s: Session) -> None:
         raise ClauseFailed(f"after the first GCS cancelled its download, the second GCS's "
                            f"MISSION_REQUEST_LIST was answered {procedures.result_name(got.type)}: the "
                            "vehicle still held the cancelled download; expected MISSION_COUNT")
-    if got.count:
-        t2.send(m.ack_message(MissionResult.ACCEPTED, MISSION, t2.target))
+    t2.send(m.ack_message(MissionResult.ACCEPTED, MISSION, t2.target))   # even an empty download is ended
 
 
 @check("MIS.CAN.04")

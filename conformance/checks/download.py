@@ -171,6 +171,7 @@ def empty_plan_counts_zero(s: Session) -> None:
     cleared = t.poll_for(ack(mission_type=MT), t.timings.default_timeout)
     count = _list(t)
     if count == 0:
+        _end(t)   # even an empty download is ended: PX4 holds it open until its 5 s timeout otherwise
         return
     if cleared is None or cleared.msg.type != MissionResult.ACCEPTED:
         raise PreconditionFailed("setup: the plan could not be cleared (MISSION_CLEAR_ALL was "

@@ -132,8 +132,9 @@ def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Do
     if count_frame is None:
         return None
     count = count_frame.msg.count
-    if count > MAX_ITEMS:
-        return None   # more than any check uploads: not read (a truncated copy would mislead)
+    if count > MAX_ITEMS:   # more than any check uploads: not read (a truncated copy would mislead)
+        t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mission_type, t.target))
+        return None
     items: list[MissionItem] = []
     want = "MISSION_ITEM_INT" if as_int else "MISSION_ITEM"
     for seq in range(count):
@@ -143,10 +144,9 @@ def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Do
             frame = t.poll_for(msg(want, seq=seq, mission_type=mt), t.timings.default_timeout)
             if frame is not None:
                 break
-        if frame is None:
-            return None
-        item = m.item_from_message(frame.msg)
-        if item is None:
+        item = None if frame is None else m.item_from_message(frame.msg)
+        if item is None:   # the download is given up: end it on the vehicle too
+            t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mission_type, t.target))
             return None
         items.append(item)
     # every download we open is ended, an empty one too: a target that keeps a download
