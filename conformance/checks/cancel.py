@@ -129,8 +129,10 @@ def cancel_ends_download(s: Session) -> None:
     t, t2 = s.t, s.second()
     procedures.ensure_plan(t, plans.mission(3, variant=64), MISSION)
     t.mark()
-    t.send(m.request_list_message(MISSION, t.target))
-    count = procedures.setup_expect(t, msg("MISSION_COUNT", mission_type=MT), "a download starts").msg.count
+    opened = procedures.open_download(t, MISSION, resends=0)
+    if opened is None:
+        raise PreconditionFailed("setup: a download starts: no MISSION_COUNT came (MIS.DN.01 judges that)")
+    count = opened.msg.count
     if count == 0:
         t.send(m.ack_message(MissionResult.ACCEPTED, MISSION, t.target))   # even an empty download is ended
         raise PreconditionFailed("the vehicle reports an empty plan after accepting a 3-item upload, so "

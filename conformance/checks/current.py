@@ -3,8 +3,6 @@ MAV_CMD_DO_SET_MISSION_CURRENT): MIS.CUR.*"""
 
 from __future__ import annotations
 
-from typing import Any
-
 from reference_impl.mission import messages as m
 from reference_impl.mission.constants import Cmd, CommandResult, MissionResult
 from reference_impl.mission.items import MissionType
@@ -25,7 +23,6 @@ STREAM_WAIT = 3.5              # s: long enough for the next streamed MISSION_CU
 BROADCAST_LAG = 0.5            # s: how much later than the requester another GCS may see it
 STREAM_WINDOW = 2.2            # s watched to measure the stream's rate
 STREAM_PERIOD = (0.5, 2.0)     # s between MISSION_CURRENTs accepted as "about 1 Hz"
-RESENDS = 1                    # an unanswered MISSION_SET_CURRENT is resent once
 
 
 def _current_is(seq: int):
@@ -45,32 +42,13 @@ def _set_current(t: Tester, seq: int) -> None:
     t.send(m.set_current_message(seq, t.target))
 
 
-def _set_current_and_see(t: Tester, seq: int) -> tuple[Any, str]:
-    """MISSION_SET_CURRENT `seq`, resent once if no MISSION_CURRENT reports it within the
-    reply timeout, as a GCS does (the message has no ACK: MAVSDK's client retransmits the
-    same way). Returns that MISSION_CURRENT (None if neither came) and a remark when only
-    the resend was acted on: a race in the target (PX4's navigator has dropped a set-current
-    sent right after a new plan), which the report shows instead of hiding."""
-    for attempt in range(RESENDS + 1):
-        _set_current(t, seq)
-        frame = t.poll_for(_current_is(seq), t.timings.default_timeout)
-        if frame is not None:
-            return frame, ("" if attempt == 0 else
-                           f"racy: the first MISSION_SET_CURRENT {seq} was not acted on within "
-                           f"{t.reply_timeout:g} s; the resend was (a race in the target)")
-        if attempt < RESENDS:
-            t.note(f"no MISSION_CURRENT{{seq={seq}}} within {t.reply_timeout:g} s: the GCS resends")
-    return None, ""
-
-
 def _plan(t: Tester, variant: int) -> None:
     """A fresh 3-item plan, which the vehicle must report holding: a set-current is only
     judged against a plan the vehicle has."""
     accepted = procedures.ensure_plan(t, plans.mission(PLAN_SIZE, variant), MISSION)
     procedures.await_plan_taken(t, accepted)
     t.mark()
-    t.send(m.request_list_message(MISSION, t.target))
-    frame = t.poll_for(msg("MISSION_COUNT", mission_type=int(MISSION)), t.timings.default_timeout)
+    frame = procedures.open_download(t, MISSION, resends=0)
     if frame is not None:   # every download opened is ended, an empty one too
         t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, MISSION, t.target))
     if frame is None or frame.msg.count != PLAN_SIZE:
@@ -83,7 +61,7 @@ def _plan(t: Tester, variant: int) -> None:
 def set_current_draws_mission_current(s: Session) -> str:
     t = s.t
     _plan(t, variant=31)
-    frame, remark = _set_current_and_see(t, 2)
+    frame, remark = procedures.set_current(t, 2)
     if frame is None:
         t.check_alive()
         raise ClauseFailed(f"neither MISSION_SET_CURRENT 2 nor its resend drew a MISSION_CURRENT{{seq=2}} "
@@ -109,7 +87,7 @@ def invalid_set_current_draws_statustext(s: Session) -> None:
 def failed_set_current_keeps_current(s: Session) -> None:
     t = s.t
     _plan(t, variant=33)
-    before = 1 if _set_current_and_see(t, 1)[0] is not None else None
+    before = 1 if procedures.set_current(t, 1)[0] is not None else None
     if before is None:   # the vehicle did not move to 1 (MIS.CUR.01 judges that): read where it is
         t.mark()
         frame = t.poll_for(CURRENT, STREAM_WAIT, forced=True)
@@ -136,7 +114,7 @@ def set_current_is_broadcast(s: Session) -> None:
     t, t2 = s.t, s.second()
     _plan(t, variant=34)
     t2.mark()
-    mine, remark = _set_current_and_see(t, 2)
+    mine, remark = procedures.set_current(t, 2)
     if mine is None:
         t.check_alive()
         raise ClauseFailed("neither MISSION_SET_CURRENT 2 nor its resend drew a MISSION_CURRENT{seq=2}, "

@@ -25,8 +25,8 @@ COUNT = msg("MISSION_COUNT", mission_type=MT)
 def _list(t: Tester) -> int:
     """Send MISSION_REQUEST_LIST; the count the vehicle answers with."""
     t.mark()
-    t.send(m.request_list_message(MISSION, t.target))
-    return t.expect(COUNT).msg.count
+    frame = procedures.open_download(t, MISSION, resends=0)
+    return (frame if frame is not None else t.expect(COUNT)).msg.count
 
 
 def _request(t: Tester, seq: int, *, as_int: bool = True) -> None:

@@ -35,8 +35,7 @@ def _request_beyond_list(t: Tester, n: int):
     """Open a download of the n-item mission plan and ask for item n + BEYOND: the first
     answer (an ACK or an item), or None."""
     t.mark()
-    t.send(m.request_list_message(MISSION, t.target))
-    if t.poll_for(msg("MISSION_COUNT", mission_type=MT), t.timings.default_timeout) is None:
+    if procedures.open_download(t, MISSION, resends=0) is None:
         return None
     t.send(m.request_message(n + BEYOND, MISSION, t.target))
     frame = t.poll_for(ack(mission_type=MT) | msg(ITEMS, mission_type=MT), t.timings.default_timeout)

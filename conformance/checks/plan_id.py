@@ -39,12 +39,7 @@ def _upload_id(t: Tester, items: list[MissionItem], mission_type: MissionType) -
 def _count_id(t: Tester, mission_type: MissionType) -> tuple[int, int]:
     """(count, opaque_id) of the MISSION_COUNT answering a MISSION_REQUEST_LIST."""
     t.mark()
-    frame = None
-    for _ in range(RETRIES + 1):
-        t.send(m.request_list_message(mission_type, t.target))
-        frame = t.poll_for(msg("MISSION_COUNT", mission_type=int(mission_type)), t.timings.default_timeout)
-        if frame is not None:
-            break
+    frame = procedures.open_download(t, mission_type)
     if frame is None:
         raise PreconditionFailed(f"MISSION_REQUEST_LIST for the {mission_type.label} plan got no MISSION_COUNT")
     if frame is not None:   # every download opened is ended, an empty one too

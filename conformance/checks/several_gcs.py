@@ -137,9 +137,11 @@ def second_gcs_ack_does_not_end_download(s: Session) -> None:
     items = plans.mission(len(FOREIGN_ACKS) + 1, variant=55)
     procedures.ensure_plan(t, items, MISSION)
     t.mark()
-    t.send(m.request_list_message(MISSION, t.target))
-    count = procedures.setup_expect(t, msg("MISSION_COUNT", mission_type=MT),
-                                    "the first GCS starts a download").msg.count
+    opened = procedures.open_download(t, MISSION, resends=0)
+    if opened is None:
+        raise PreconditionFailed("setup: the first GCS starts a download: no MISSION_COUNT came "
+                                 "(MIS.DN.01 judges that)")
+    count = opened.msg.count
     if count != len(items):
         t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, MISSION, t.target))
         raise PreconditionFailed(f"the vehicle reported {count} items for the {len(items)}-item plan "

@@ -109,6 +109,8 @@ def _download_checked(t: Tester, mt: MissionType, want: list[MissionItem]) -> No
         frame = t.poll_for(msg("MISSION_COUNT") | ack(), t.timings.default_timeout)
         if frame is not None:
             break
+    if frame is not None and frame.msg._type == "MISSION_COUNT" and frame.msg.mission_type == mt:
+        frame = procedures.fresh_count(t, frame)
     if frame is None:
         raise PreconditionFailed(f"MISSION_REQUEST_LIST for the {mt.label} plan got no answer")
     got = frame.msg

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from reference_impl.mission import messages as m
 from reference_impl.mission.constants import Cmd, CommandResult
 from reference_impl.mission.items import MissionItem
 from reference_impl.wire.dialect import mavlink as _d
@@ -78,9 +77,7 @@ def flight_plan(t: Tester, n: int) -> list[MissionItem]:
 def start(t: Tester, autopilot: int | None) -> None:
     """Get the vehicle flying its mission from the first item; PreconditionFailed if it will not."""
     first = t.form.first_flown()
-    t.mark()
-    t.send(m.set_current_message(first, t.target))
-    if t.poll_for(msg("MISSION_CURRENT", seq=first), procedures.PLAN_TAKEN_WAIT, forced=True) is None:
+    if procedures.set_current(t, first)[0] is None:
         raise PreconditionFailed(f"flight: after MISSION_SET_CURRENT {first} no MISSION_CURRENT reported "
                                  f"item {first} current, so the flight would not start at the first item")
     if autopilot == ARDUPILOT:

@@ -119,16 +119,80 @@ def await_plan_taken(t: Tester, accepted: Frame) -> None:
                f"{PLAN_TAKEN_WAIT * t.scale:g} s; going on")
 
 
+def open_download(t: Tester, mission_type: MissionType | int, *, resends: int = RETRIES) -> Frame | None:
+    """MISSION_REQUEST_LIST (resent up to `resends` times); the MISSION_COUNT (`fresh_count`),
+    or None."""
+    mt = int(mission_type)
+    frame = None
+    for _ in range(resends + 1):
+        t.send(m.request_list_message(mission_type, t.target))
+        frame = t.poll_for(msg("MISSION_COUNT", mission_type=mt), t.timings.default_timeout)
+        if frame is not None:
+            break
+    return None if frame is None else fresh_count(t, frame)
+
+
+ACK_LOOKBACK = 5000   # frames searched back for the last accepting MISSION_ACK
+
+
+def fresh_count(t: Tester, count: Frame) -> Frame | None:
+    """`count` (a MISSION_COUNT), unless it names another plan id than the last upload the
+    vehicle accepted from this tester: then the vehicle still serves the plan from before it
+    (PX4 answers a download sent right after the ACK from its old plan, now and then), so
+    that download is ended, the vehicle is given until it reports the new plan, and the
+    list is asked for once more. The race is noted in the exchange."""
+    mt = count.msg.mission_type
+    expected = _accepted_id(t, mt)
+    reported = getattr(count.msg, "opaque_id", 0)
+    if not expected or reported == expected:
+        return count
+    t.note(f"racy: the download was answered from the plan before the accepted upload (id "
+           f"0x{reported:08x}, not 0x{expected:08x}); ending it and asking again once the vehicle "
+           "reports the new plan")
+    t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mt, t.target))
+    if mt == int(MissionType.MISSION):
+        t.poll_for(msg("MISSION_CURRENT", mission_id=expected), PLAN_TAKEN_WAIT, forced=True)
+    else:
+        t.wait_until(lambda: False, t.timings.default_timeout)
+    t.send(m.request_list_message(mt, t.target))
+    return t.poll_for(msg("MISSION_COUNT", mission_type=mt), t.timings.default_timeout)
+
+
+def _accepted_id(t: Tester, mission_type: int) -> int:
+    """The opaque_id of the last MISSION_ACK ACCEPTED of `mission_type` this tester's link
+    carried (an upload's or a clear's, to this GCS or another on the link), 0 if none."""
+    inbox = t.node.inbox
+    for k in range(len(inbox) - 1, max(-1, len(inbox) - 1 - ACK_LOOKBACK), -1):
+        got = inbox[k][1].msg
+        if got._type == "MISSION_ACK" and got.type == MissionResult.ACCEPTED and got.mission_type == mission_type:
+            return getattr(got, "opaque_id", 0)
+    return 0
+
+
+def set_current(t: Tester, seq: int, *, resends: int = 1) -> tuple[Frame | None, str]:
+    """MISSION_SET_CURRENT `seq`, resent if no MISSION_CURRENT reports it within the reply
+    timeout, as a GCS does (the message has no ACK: MAVSDK's client retransmits the same
+    way). Returns that MISSION_CURRENT (None if none came) and a remark when only a resend
+    was acted on: a race in the target (PX4's navigator has dropped a set-current sent right
+    after a new plan), which the report shows instead of hiding."""
+    for attempt in range(resends + 1):
+        t.mark()
+        t.send(m.set_current_message(seq, t.target))
+        frame = t.poll_for(msg("MISSION_CURRENT", seq=seq), t.timings.default_timeout)
+        if frame is not None:
+            return frame, ("" if attempt == 0 else
+                           f"racy: the first MISSION_SET_CURRENT {seq} was not acted on within "
+                           f"{t.reply_timeout:g} s; the resend was (a race in the target)")
+        if attempt < resends:
+            t.note(f"no MISSION_CURRENT{{seq={seq}}} within {t.reply_timeout:g} s: the GCS resends")
+    return None, ""
+
+
 def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Download | None:
     """Read the `mission_type` plan back; None if the target did not complete the download."""
     mt = int(mission_type)
     t.mark()
-    count_frame = None
-    for _ in range(RETRIES + 1):
-        t.send(m.request_list_message(mission_type, t.target))
-        count_frame = t.poll_for(msg("MISSION_COUNT", mission_type=mt), t.timings.default_timeout)
-        if count_frame is not None:
-            break
+    count_frame = open_download(t, mission_type)
     if count_frame is None:
         return None
     count = count_frame.msg.count
