@@ -163,6 +163,7 @@ class Session:
             node.endpoint.add_address(self.target_address)
             tester = Tester(node, self.driver, scale=self.scale)
             tester.form = self.t.form
+            tester.plan_ids = self.t.plan_ids   # one record of accepted plans for both GCSs
             tester.exchange = self.t.exchange
             record_traffic(tester)
             self._second = tester

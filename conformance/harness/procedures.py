@@ -132,9 +132,6 @@ def open_download(t: Tester, mission_type: MissionType | int, *, resends: int = 
     return None if frame is None else fresh_count(t, frame)
 
 
-ACK_LOOKBACK = 5000   # frames searched back for the last accepting MISSION_ACK
-
-
 def fresh_count(t: Tester, count: Frame) -> Frame | None:
     """`count` (a MISSION_COUNT), unless it names another plan id than the last upload the
     vehicle accepted from this tester: then the vehicle still serves the plan from before it
@@ -142,7 +139,7 @@ def fresh_count(t: Tester, count: Frame) -> Frame | None:
     that download is ended, the vehicle is given until it reports the new plan, and the
     list is asked for once more. The race is noted in the exchange."""
     mt = count.msg.mission_type
-    expected = _accepted_id(t, mt)
+    expected = t.plan_ids.get(mt, 0)
     reported = getattr(count.msg, "opaque_id", 0)
     if not expected or reported == expected:
         return count
@@ -156,17 +153,6 @@ def fresh_count(t: Tester, count: Frame) -> Frame | None:
         t.wait_until(lambda: False, t.timings.default_timeout)
     t.send(m.request_list_message(mt, t.target))
     return t.poll_for(msg("MISSION_COUNT", mission_type=mt), t.timings.default_timeout)
-
-
-def _accepted_id(t: Tester, mission_type: int) -> int:
-    """The opaque_id of the last MISSION_ACK ACCEPTED of `mission_type` this tester's link
-    carried (an upload's or a clear's, to this GCS or another on the link), 0 if none."""
-    inbox = t.node.inbox
-    for k in range(len(inbox) - 1, max(-1, len(inbox) - 1 - ACK_LOOKBACK), -1):
-        got = inbox[k][1].msg
-        if got._type == "MISSION_ACK" and got.type == MissionResult.ACCEPTED and got.mission_type == mission_type:
-            return getattr(got, "opaque_id", 0)
-    return 0
 
 
 def set_current(t: Tester, seq: int, *, resends: int = 1) -> tuple[Frame | None, str]:

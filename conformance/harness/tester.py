@@ -45,6 +45,9 @@ class Tester:
         self._floor = 0
         self._consumed: set[int] = set()   # ids of matched frames past the floor
         self.touched_types: set[int] = set()   # every mission_type sent, invalid ones too (cleanup)
+        # mission_type -> opaque_id the vehicle's last MISSION_ACK ACCEPTED gave it, to any of
+        # the session's GCSs (shared between them; kept by `record_traffic`)
+        self.plan_ids: dict[int, int] = {}
 
     # --- time -----------------------------------------------------------------------------
     def now(self) -> float:
@@ -234,6 +237,11 @@ def record_traffic(tester: Tester) -> None:
     node = tester.node
 
     def on_frame(peer: str, now: float, frame: Frame) -> None:
+        msg = frame.msg
+        if msg._type == "MISSION_ACK" and msg.type == 0:   # MAV_MISSION_ACCEPTED: the plan is new
+            ids = tester.plan_ids
+            for mt in ((0, 1, 2) if msg.mission_type == 255 else (msg.mission_type,)):
+                ids[mt] = getattr(msg, "opaque_id", 0)
         ex = tester.exchange
         if ex is not None and relevant(frame.msg._type):
             ex.add(now, "rx", peer, frame.msg._type, message_fields(frame.msg))
