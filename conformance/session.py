@@ -14,6 +14,7 @@ import time
 from typing import Any, Callable
 
 from reference_impl.net.guard import GuardedNode
+from reference_impl.net.shared_link import SharedLink
 from reference_impl.net.sim import CaptureHook, SimNetwork
 from reference_impl.net.udp import UdpDriver
 from reference_impl.net.uri import local_bind_for
@@ -21,7 +22,6 @@ from reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.tester import Tester, record_traffic
 from .harness.stored_form import form_for_autopilot, form_of_behaviour
-from .harness.tester_link import TesterLink
 from .harness.tester_node import MAV_AUTOPILOT_INVALID, MAV_TYPE_GCS, TesterNode
 from .outcome import TargetUnresponsive
 from .target_uri import TargetUri
@@ -68,7 +68,7 @@ class Session:
         self.target_address: Any = None
         self._second: Tester | None = None
         node = TesterNode("tester", TESTER_SYSTEM, TESTER_COMPONENT)
-        self.link = TesterLink(node)
+        self.link = SharedLink(node)
         if virtual:
             if not uri.in_process:
                 raise ValueError("virtual time needs an in-process target")

@@ -367,14 +367,16 @@ class Runner:
                        for msg in probe.heard)
 
         tries = t.max_retries + 1
-        for _ in range(tries):
-            probe.listen()
-            probe.send_raw(m.request_list_message(MissionType.MISSION, target))
-            if w.run_until(answered, t.default_timeout):
-                if probe.counts.get(int(MissionType.MISSION), 0) > 0:
-                    probe.send_raw(m.ack_message(MissionResult.OPERATION_CANCELLED, MissionType.MISSION, target))
-                    w.run_until(_always, 0.0)
-                return None
+        with w.faults_lifted():
+            for _ in range(tries):
+                probe.listen()
+                probe.send_raw(m.request_list_message(MissionType.MISSION, target))
+                if w.run_until(answered, t.default_timeout):
+                    if probe.counts.get(int(MissionType.MISSION), 0) > 0:
+                        probe.send_raw(m.ack_message(MissionResult.OPERATION_CANCELLED, MissionType.MISSION,
+                                                     target))
+                        w.run_until(_always, 0.0)
+                    return None
         crashed = w.crashes()
         why = f" (it raised: {crashed[0]})" if crashed else ""
         return self._violation("still-answers", (

@@ -8,16 +8,22 @@
 
 In-process targets (`builtin:`, `mutant:`) put the vehicle on a `SimNetwork` in virtual
 time (deterministic from the seed, and the vehicle's store and transfer state can be read
-directly). `udp:`/`udpin:` targets are reached over real sockets with bounded waits, and
-judged from the wire only. Every node sits in a `GuardedNode`, so a node that raises falls
+directly); each GCS has a link of its own, and the faults act on A's. `udp:`/`udpin:`
+targets are reached over real sockets with bounded waits, and judged from the wire only.
+There all four GCSs share one socket (`SharedLink`, routed by system id): a real vehicle's
+GCS link is bound to one peer (VARIANTS.md L1, L2) and would never hear a GCS on a socket
+of its own. The faults then act on that one link, as on a real radio link, and are lifted
+while the probe asks (`faults_lifted`), so the probe still has a clean link. Every node sits in a `GuardedNode`, so a node that raises falls
 silent and the exception is kept: a crash is a finding, never a traceback here.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 from conformance.session import build_vehicle
 from conformance.target_uri import TargetUri, parse_target
@@ -25,6 +31,7 @@ from reference_impl.mission.items import MissionType
 from reference_impl.mission.timing import Timings
 from reference_impl.net import FaultModel, SimNetwork, UdpDriver
 from reference_impl.net.guard import GuardedNode
+from reference_impl.net.shared_link import SharedLink
 from reference_impl.net.sim import CaptureHook
 from reference_impl.net.uri import local_bind_for
 from reference_impl.vehicle import VehicleNode
@@ -65,6 +72,7 @@ class World:
         self.vehicle: VehicleNode | None = None
         self.guards: dict[str, GuardedNode] = {}
         self.unresponsive: str | None = None   # set when a remote target never said HEARTBEAT
+        self.shared = False                    # all GCSs on one socket (UDP targets)
         self._up, self._down = FaultModel(), FaultModel()   # A's link; changed in place
         if self.virtual:
             self._open_sim(capture)
@@ -87,6 +95,20 @@ class World:
         """Faults on GCS A's link from now on: `up` is what A sends, `down` what it gets."""
         install(self._up, up)
         install(self._down, down)
+
+    @contextmanager
+    def faults_lifted(self) -> Iterator[None]:
+        """A clean link while the body runs, where the probe shares A's (UDP targets); the
+        faults as they were (rule counters included) afterwards."""
+        if not self.shared:
+            yield
+            return
+        saved = copy.copy(self._up), copy.copy(self._down)
+        self.set_faults(FaultModel(), FaultModel())
+        try:
+            yield
+        finally:
+            self.set_faults(*saved)
 
     # --- what can be seen of the vehicle (in-process only) ----------------------------------
     def stored(self, t: MissionType) -> tuple | None:
@@ -149,11 +171,12 @@ class World:
             self.mute = self._gcs(SYSTEM_MUTE, None, heartbeat=True, mute=True)
             if capture is not None:
                 driver.add_capture(capture)
+            link = SharedLink(self._guarded("a", self.a))
+            self.shared = True
+            bind = (bind_host, 0) if self.uri.kind == "udp" else udp.address   # udpin: it sends first
+            driver.add_node(link, bind=bind, outgoing=self._up, incoming=self._down)
             if self.uri.kind == "udp":
-                self._guarded_udp("a", self.a, (bind_host, 0), faults=True)
                 self.a.endpoint.add_address(udp.address)
-            else:   # udpin: the target sends to us first
-                self._guarded_udp("a", self.a, udp.address, faults=True)
             if not driver.run_until(lambda: self.a.target is not None, timeout=DISCOVERY_TIMEOUT):
                 self.unresponsive = (f"no HEARTBEAT from {self.uri} within {DISCOVERY_TIMEOUT:g} s "
                                      "(is it running, and is the address right?)")
@@ -163,7 +186,7 @@ class World:
             address = self.a.endpoint.peers.get(self.target, udp.address)
             for name, gcs in (("b", self.b), ("probe", self.probe), ("mute", self.mute)):
                 gcs.set_target(self.target)
-                self._guarded_udp(name, gcs, (local_bind_for(address[0]), 0), faults=False)
+                link.join(self._guarded(name, gcs))
                 gcs.endpoint.add_address(address)
         except BaseException:
             driver.close()
@@ -173,12 +196,9 @@ class World:
         guard = self.guards[name] = GuardedNode(node)
         add(name, guard)
 
-    def _guarded_udp(self, name: str, node: Any, bind: tuple[str, int], *, faults: bool) -> None:
+    def _guarded(self, name: str, node: Any) -> GuardedNode:
         guard = self.guards[name] = GuardedNode(node)
-        if faults:
-            self.driver.add_node(guard, bind=bind, outgoing=self._up, incoming=self._down)
-        else:
-            self.driver.add_node(guard, bind=bind)
+        return guard
 
 
 def _never() -> bool:

@@ -169,3 +169,22 @@ def test_protocol_fuzzing_holds_px4_to_its_own_retry_rule_and_refuses_ardupilot(
     assert _fuzz(tmp_path, "--target", "builtin:px4", "--examples", "60", "--seed", "2") == 0
     assert _fuzz(tmp_path, "--target", "builtin:ardupilot", "--examples", "5") == 2
     assert "protocol fuzzing of builtin:ardupilot is not supported" in capsys.readouterr().err
+
+
+@pytest.mark.udp
+def test_protocol_fuzzing_a_single_peer_vehicle_over_udp_is_heard(tmp_path) -> None:
+    """Issue 11: real PX4 and ArduPilot SITL send to the GCS port they were given and bind
+    their link to that one peer; the fuzzer's probe GCS on a socket of its own was never
+    answered, so `still-answers` fired at step 0. All the fuzzer's GCSs now share the one
+    socket (udpin: the same port every example), routed by system id."""
+    import socket
+
+    from tests.vehicle_process import vehicle_process
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:   # a free port for us
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    with vehicle_process("--single-peer", "--connect", f"udp:127.0.0.1:{port}"):
+        code = _fuzz(tmp_path, "--target", f"udpin:{port}", "--mode", "protocol",
+                     "--examples", "3", "--seed", "4", "--time", "60s")
+    doc = load_run(tmp_path / "rep" / "fuzz.json")
+    assert code == 0 and doc["fuzz"]["findings"] == [], doc["fuzz"]["findings"]

@@ -1,28 +1,27 @@
-"""`TesterLink`: several scripted GCS identities on one socket.
+"""`SharedLink`: several MAVLink nodes (GCS identities) on one socket.
 
 A real vehicle's GCS link is often bound to one peer address: ArduPilot SITL's `udpclient`
 socket is connected to the one address it was given, and PX4 locks a link to its first
 sender (VARIANTS.md L1, L2). A second GCS on a socket of its own is then never heard, and
 the replies meant for it arrive on the first GCS's socket. MAVLink routing has the answer
 already: several systems behind one link, each message routed by its target_system. So
-every identity on the link sees every datagram, and each keeps what is addressed to it
-(`Tester` judges only frames that are broadcast or carry its own system id).
+every node on the link sees every datagram, and each keeps what is addressed to it (the
+conformance `Tester` judges only frames that are broadcast or carry its own system id; the
+fuzzer's GCSs likewise). One `DatagramNode` to the driver: one socket, one fault model.
 """
 
 from __future__ import annotations
 
-from reference_impl.net.node import Address
-
-from .tester_node import TesterNode
+from .node import Address, DatagramNode
 
 
-class TesterLink:
-    """A `DatagramNode` carrying the `TesterNode`s that share one socket."""
+class SharedLink:
+    """A `DatagramNode` carrying the nodes that share one socket."""
 
-    def __init__(self, first: TesterNode) -> None:
-        self.nodes: list[TesterNode] = [first]
+    def __init__(self, first: DatagramNode) -> None:
+        self.nodes: list[DatagramNode] = [first]
 
-    def join(self, node: TesterNode) -> None:
+    def join(self, node: DatagramNode) -> None:
         self.nodes.append(node)
 
     def datagram_received(self, data: bytes, source: Address, now: float) -> None:
