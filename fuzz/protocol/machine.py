@@ -10,6 +10,8 @@ every rule (and by `replay` after every step) through the same `Runner.check`.
 
 from __future__ import annotations
 
+import time
+
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -56,10 +58,16 @@ def finding_type(invariant: str) -> type[Finding]:
 
 
 def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = None,
-                  on_finding: Callable[[Finding], None] | None = None) -> type[RuleBasedStateMachine]:
-    """A machine class for one campaign (strategies depend on the knobs)."""
+                  on_finding: Callable[[Finding], None] | None = None,
+                  stop_at: float | None = None) -> type[RuleBasedStateMachine]:
+    """A machine class for one campaign (strategies depend on the knobs). Past `stop_at`
+    (time.monotonic) the rules do nothing, so an example running when a wall-time budget
+    ends stops within one step: over UDP one example can take longer than the budget."""
     n = knobs.max_items
     after = min(4.0, knobs.max_wait)
+
+    def _spent() -> bool:
+        return stop_at is not None and time.monotonic() >= stop_at
 
     class ProtocolMachine(RuleBasedStateMachine):
         def __init__(self) -> None:
@@ -71,9 +79,12 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
         @initialize(seed=st.integers(0, 2**32 - 1))
         def connect(self, seed: int) -> None:
             self.seed = seed
-            self.runner = Runner(knobs.target, seed, atomic=knobs.atomic)
+            if not _spent():   # past the budget the example is empty: no world to open
+                self.runner = Runner(knobs.target, seed, atomic=knobs.atomic)
 
         def _do(self, step: dict[str, Any]) -> None:
+            if _spent() or self.runner is None:
+                return
             self.steps.append(step)
             self._raise(self.runner.apply(step))
 
@@ -127,13 +138,13 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
 
         @invariant()
         def vehicle_keeps_the_protocol_invariants(self) -> None:
-            if self.runner is not None and self.steps:
+            if self.runner is not None and self.steps and not _spent():
                 self._raise(self.runner.check())
 
         def teardown(self) -> None:
             if self.runner is not None:
                 self.runner.close()
-            if on_example is not None:
+            if on_example is not None and self.runner is not None:   # an empty one (past the budget) is none
                 on_example(len(self.steps))
 
     return ProtocolMachine

@@ -31,7 +31,8 @@ from .steps import Runner
 
 MODE = "protocol"
 DEFAULT_EXAMPLES = 100
-FIRST_CHUNK = 8             # examples in the first chunk of a budgeted search
+FIRST_CHUNK = 8             # examples in the first chunk of a budgeted search (in-process)
+FIRST_CHUNK_UDP = 1         # ... over UDP, where one example can take half a minute
 MAX_CHUNK = 500
 _OPS = {"upload": ("type", "items"), "download": ("type",), "clear": ("type",),
         "set_current": ("seq",), "cancel": ("of", "after"), "second_gcs": ("first", "second", "after"),
@@ -58,7 +59,8 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
         left = None if max_examples is None else max_examples - done
         if (left is not None and left <= 0) or (deadline is not None and time.monotonic() >= deadline):
             return []
-        size = left if deadline is None else _chunk_size(rate, deadline - time.monotonic(), left)
+        first = FIRST_CHUNK if parse_target(knobs.target).in_process else FIRST_CHUNK_UDP
+        size = left if deadline is None else _chunk_size(rate, deadline - time.monotonic(), left, first)
         counted = [0]
 
         def example_done(units: int) -> None:
@@ -67,7 +69,7 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
                 on_example(units)
 
         t0 = time.monotonic()
-        found = _run_chunk(knobs, seed, chunk, size, database, example_done)
+        found = _run_chunk(knobs, seed, chunk, size, database, example_done, deadline)
         done += counted[0]
         rate = counted[0] / max(time.monotonic() - t0, 1e-6)
         if found:
@@ -94,16 +96,16 @@ def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | Non
 
 # --- internals -------------------------------------------------------------------------------
 
-def _chunk_size(rate: float, time_left: float, left: int | None) -> int:
+def _chunk_size(rate: float, time_left: float, left: int | None, first: int = FIRST_CHUNK) -> int:
     """Half the remaining budget's worth of examples at the last rate (a small first chunk)."""
-    size = FIRST_CHUNK if rate <= 0 else int(rate * max(time_left, 0.0) / 2)
+    size = first if rate <= 0 else int(rate * max(time_left, 0.0) / 2)
     size = max(1, min(size, MAX_CHUNK))
     return size if left is None else min(size, left)
 
 
 def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: ExampleDatabase | None,
-               on_example: Callable[[int], None]) -> list[Finding]:
-    machine = machine_class(knobs, on_example=on_example)
+               on_example: Callable[[int], None], stop_at: float | None = None) -> list[Finding]:
+    machine = machine_class(knobs, on_example=on_example, stop_at=stop_at)
     test = get_state_machine_test(machine, settings=settings(
         max_examples=size, stateful_step_count=knobs.steps, deadline=None, database=database,
         derandomize=False, suppress_health_check=list(HealthCheck), verbosity=Verbosity.quiet,
