@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from reference_impl.mission import messages as m
 from reference_impl.mission.constants import CommandResult, MissionResult
 from reference_impl.mission.items import MissionType
 from reference_impl.wire.dialect import mavlink as _d
@@ -48,8 +49,7 @@ def prepare(t: Tester) -> Readiness:
 
 def _ask_for_stream(t: Tester, name: str, msg_id: int, group: int) -> str:
     t.mark()
-    t.send(_d.MAVLink_command_long_message(t.target[0], t.target[1], MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-                                           msg_id, INTERVAL_US, 0, 0, 0, 0, 0))
+    t.send(m.command_long_message(MAV_CMD_SET_MESSAGE_INTERVAL, t.target, msg_id, INTERVAL_US))
     reply = t.poll_for(msg("COMMAND_ACK", command=MAV_CMD_SET_MESSAGE_INTERVAL), t.timings.default_timeout)
     if reply is not None and reply.msg.result == CommandResult.ACCEPTED:
         return f"{name} at 1 Hz: MAV_CMD_SET_MESSAGE_INTERVAL accepted"

@@ -195,10 +195,9 @@ def _await_let_go(session: Session) -> None:
     LET_GO_MAX. Each request that still comes gets a cancel of its own."""
     measured = session.cache.get("silent_upload")
     quiet = LET_GO_QUIET
-    if measured is not None:
-        times = measured[0].repeated
-        if len(times) >= 2:
-            quiet = min(LET_GO_QUIET, 1.5 * max(b - a for a, b in zip(times, times[1:])) / session.scale)
+    gaps = measured[0].gaps if measured is not None else []
+    if gaps:
+        quiet = min(LET_GO_QUIET, 1.5 * gaps[-1] / session.scale)
     inbox = session.t.node.inbox
     clock = session.driver.clock
     opened = clock.now()

@@ -125,6 +125,12 @@ class SilentUpload:
         first = self.requests[0][1]
         return [dt for dt, seq in self.requests if seq == first]
 
+    @property
+    def gaps(self) -> list[float]:
+        """The intervals between those re-requests, shortest first."""
+        times = self.repeated
+        return sorted(b - a for a, b in zip(times, times[1:]))
+
 
 def silent_upload(s: Session) -> SilentUpload:
     return s.shared("silent_upload", lambda: _observe_silent_upload(s.t))
@@ -149,11 +155,8 @@ def _observe_silent_upload(t: Tester) -> SilentUpload:
 def retry_interval(s: Session) -> float | None:
     """The target's own re-request interval (median gap of the silent upload), or None if
     it never re-requested."""
-    times = silent_upload(s).repeated
-    if len(times) < 2:
-        return None
-    gaps = sorted(b - a for a, b in zip(times, times[1:]))
-    return gaps[len(gaps) // 2]
+    gaps = silent_upload(s).gaps
+    return gaps[len(gaps) // 2] if gaps else None
 
 
 def silence_window(s: Session, at_least: float) -> float:

@@ -23,9 +23,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from reference_impl.mission import messages as m
 from reference_impl.mission.constants import Cmd, CommandResult
 from reference_impl.mission.items import MissionItem
-from reference_impl.wire.dialect import mavlink as _d
 
 from ..outcome import NotApplicable, PreconditionFailed
 from . import plans, procedures
@@ -91,18 +91,13 @@ def start(t: Tester, autopilot: int | None) -> None:
 def end(t: Tester) -> None:
     """Send the vehicle home, so the plans later clauses upload are not flown."""
     t.note("the flight is over: MAV_CMD_NAV_RETURN_TO_LAUNCH")
-    t.send(_long(t, MAV_CMD_NAV_RETURN_TO_LAUNCH))
-
-
-def _long(t: Tester, command: int, *params: float):
-    p = list(params) + [0.0] * (7 - len(params))
-    return _d.MAVLink_command_long_message(t.target[0], t.target[1], command, 0, *p)
+    t.send(m.command_long_message(MAV_CMD_NAV_RETURN_TO_LAUNCH, t.target))
 
 
 def _command(t: Tester, command: int, what: str, *params: float) -> int | None:
     """Send one COMMAND_LONG; its result (None: the vehicle does not have the step)."""
     t.mark()
-    t.send(_long(t, command, *params))
+    t.send(m.command_long_message(command, t.target, *params))
     reply = t.poll_for(msg("COMMAND_ACK", command=command), t.timings.default_timeout)
     if reply is None:
         raise PreconditionFailed(f"flight: {what}: no COMMAND_ACK within {t.reply_timeout:g} s")
@@ -120,7 +115,7 @@ def _arm(t: Tester) -> bool:
     opened = t.now()
     for _ in range(int(ARM_WINDOW / ARM_RETRY) + 1):
         t.mark()
-        t.send(_long(t, MAV_CMD_COMPONENT_ARM_DISARM, 1.0))
+        t.send(m.command_long_message(MAV_CMD_COMPONENT_ARM_DISARM, t.target, 1.0))
         reply = t.poll_for(msg("COMMAND_ACK", command=MAV_CMD_COMPONENT_ARM_DISARM), t.timings.default_timeout)
         if reply is not None and reply.msg.result in GOING:
             return True

@@ -8,7 +8,7 @@ whatever the MAVLink version. A target that never acknowledges it gets the reply
 
 from __future__ import annotations
 
-from reference_impl.wire.dialect import mavlink as _d
+from reference_impl.mission import messages as m
 
 from .match import msg
 from .tester import Tester
@@ -26,8 +26,7 @@ def answers_before_sentinel(t: Tester) -> list:
     version. A target that never acknowledges it has had the reply timeout to answer."""
     t.note("then a properly addressed COMMAND_LONG MAV_CMD_REQUEST_MESSAGE (HEARTBEAT): its "
            "COMMAND_ACK closes the window")
-    t.send(_d.MAVLink_command_long_message(t.target[0], t.target[1], MAV_CMD_REQUEST_MESSAGE, 0,
-                                           0, 0, 0, 0, 0, 0, 0))
+    t.send(m.command_long_message(MAV_CMD_REQUEST_MESSAGE, t.target))
     sentinel = msg("COMMAND_ACK", command=MAV_CMD_REQUEST_MESSAGE)
     seen = t.collect(msg(MISSION_REPLIES), t.timings.default_timeout, stop=sentinel)
     return [f for _, f in seen if not sentinel(f)]

@@ -20,11 +20,9 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
-from reference_impl.mission.items import MissionItem, MissionType
+from reference_impl.mission.items import GLOBAL_FRAMES, PLAIN_FRAME, MissionItem, MissionType
 from reference_impl.mission.store import STORAGE_FORMS
 
-# upstream common.xml MAV_FRAME: "Use MAV_FRAME_GLOBAL... as a synonymous replacement"
-FRAME_SYNONYMS = {5: 0, 6: 3, 11: 10}
 MAX_LISTED = 8          # differences listed in one verdict; the rest are counted
 _FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z",
            "autocontinue", "mission_type")
@@ -38,7 +36,6 @@ RESERVED_PARAMS = {
     5100: (1, 2, 3, 4),     # MAV_CMD_NAV_RALLY_POINT
 }
 _PARAM_FIELD = {1: "param1", 2: "param2", 3: "param3", 4: "param4", 7: "z"}
-_GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})
 
 
 @dataclass(frozen=True)
@@ -66,12 +63,12 @@ class StoredForm:
         """An item as any comparison sees it: stored form, plain frame, no `current` flag,
         reserved params and flags the item type does not have left out."""
         kept = STORAGE_FORMS[self.storage](item)
-        frame = FRAME_SYNONYMS.get(kept.frame, kept.frame)
+        frame = PLAIN_FRAME.get(kept.frame, kept.frame)
         changes: dict[str, Any] = {"current": 0, "frame": frame}
         reserved = RESERVED_PARAMS.get(int(kept.command), ())
         for index in reserved:
             changes[_PARAM_FIELD[index]] = 0.0
-        if 7 in reserved and frame in _GLOBAL_FRAMES:
+        if 7 in reserved and frame in GLOBAL_FRAMES:
             changes["frame"] = 0    # no altitude: the altitude reference means nothing
         if int(kept.mission_type) != int(MissionType.MISSION):
             changes["autocontinue"] = 0

@@ -36,6 +36,9 @@ PLAN_TYPE_BY_VALUE: dict[int, MissionType] = {int(t): t for t in PLAN_TYPES}
 
 # MAV_FRAME values whose x/y are latitude/longitude (degE7 in MISSION_ITEM_INT).
 GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})
+# *_INT frame -> its plain frame: upstream common.xml supersedes 5, 6, 11 as "synonymous
+# replacements" of 0, 3, 10 (a 15-byte command record cannot tell them apart either).
+PLAIN_FRAME = {5: 0, 6: 3, 11: 10}
 # MAV_FRAME values whose x/y are local metres (metres*1e4 in MISSION_ITEM_INT).
 LOCAL_FRAMES = frozenset({1, 7, 8, 9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21})
 # MAV_FRAME_MISSION: x/y are plain parameters, carried unscaled.

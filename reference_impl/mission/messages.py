@@ -88,10 +88,17 @@ def set_current_message(seq: int, target: tuple[int, int]) -> Any:
     return _d.MAVLink_mission_set_current_message(target[0], target[1], seq)
 
 
+def command_long_message(command: int, target: tuple[int, int], *params: float) -> Any:
+    """COMMAND_LONG `command` to `target` (first transmission), params 1..7; missing ones 0."""
+    if len(params) > 7:
+        raise ValueError(f"COMMAND_LONG has 7 params, got {len(params)}")
+    return _d.MAVLink_command_long_message(target[0], target[1], int(command), 0,
+                                          *params, *([0.0] * (7 - len(params))))
+
+
 def set_current_command(seq: int, target: tuple[int, int]) -> Any:
     """COMMAND_LONG MAV_CMD_DO_SET_MISSION_CURRENT (param1 = seq, param2 = 0: no reset)."""
-    return _d.MAVLink_command_long_message(
-        target[0], target[1], Cmd.DO_SET_MISSION_CURRENT, 0, float(seq), 0, 0, 0, 0, 0, 0)
+    return command_long_message(Cmd.DO_SET_MISSION_CURRENT, target, float(seq))
 
 
 def current_message(seq: int, total: int, state: int, mode: int, ids: tuple[int, int, int]) -> Any:

@@ -17,7 +17,7 @@ from dataclasses import replace
 from typing import Callable, Iterable, Sequence
 
 from .constants import Cmd
-from .items import PLAN_TYPES, MissionItem, MissionType, to_float32
+from .items import PLAIN_FRAME, PLAN_TYPES, MissionItem, MissionType, to_float32
 
 _ITEM = struct.Struct("<HBHffffiifBBB")
 
@@ -68,8 +68,6 @@ class MissionStore:
 
 
 # --- storage forms (ServerBehaviour.item_storage) ------------------------------------------
-# *_INT frames a 15-byte command record cannot tell apart from their plain frames.
-_PLAIN_FRAME = {5: 0, 6: 3, 11: 10}
 _INT16 = 32767
 
 
@@ -88,7 +86,7 @@ def _compact15(item: MissionItem) -> MissionItem:
     keeps only its hold time, in whole seconds (0..65535); fence items keep param1 (vertex
     count or radius); *_INT frames come back as their plain frames. x/y are int32 already.
     """
-    frame = _PLAIN_FRAME.get(item.frame, item.frame)
+    frame = PLAIN_FRAME.get(item.frame, item.frame)
     t = item.mission_type
     if t is MissionType.RALLY:
         return replace(item, frame=frame, param1=0.0, param2=0.0, param3=0.0, param4=0.0,
