@@ -1,20 +1,29 @@
 """A fuzz campaign: search with one mode, save each finding as a replayable case, report.
 
 The modes (`fuzz.protocol`, `fuzz.frames`) search and shrink; this module is what they
-have in common around that: the budget (examples or wall time), the progress counters, the
-findings directory (`NAME.json` + `NAME.mcap` per finding, the capture taken by replaying
-the case, which also proves the case reproduces), and the run document that the reports
-package renders, so CI shows fuzz findings the way it shows conformance failures.
+have in common around that: the budget (examples or wall time, shrinking and saving
+included), the progress counters, the findings directory (`NAME.json` + `NAME.mcap` per
+finding, the capture taken by replaying the case, which also proves the case reproduces),
+and the run document that the reports package renders, so CI shows fuzz findings the way
+it shows conformance failures.
+
+A UDP target that dies (`target-crash`, `target-hang`) cannot be replayed as it is: the
+case is saved at once, unminimised, with the capture of the live traffic that led to it
+(the last RING_SECONDS, kept while the campaign ran). With a restart hook (`Restarter`,
+`--restart-cmd`) the target is restarted, the case replayed to confirm it, and minimised
+with a restart before every attempt; without one the case says it was neither.
 """
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import datetime as dt
 import importlib
 import struct
+import subprocess
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import ModuleType
 from typing import Any, Callable, Iterator
@@ -26,9 +35,15 @@ from reference_impl.net.sim import CaptureRecord
 from reference_impl.wire.codec import FrameDecoder
 
 from .case import Case, Violation, save_case
+from .outcomes import DEATH_KINDS, ToolError, ToolFailure
 
 MODES = ("protocol", "frames")
 SHRINK_LIMIT = 60.0          # s Hypothesis may spend shrinking one campaign's findings, at most
+SAVE_GRACE = 2.0             # s left for saving a finding when the budget is spent (one replay)
+RING_SECONDS = 120.0         # s of live traffic a UDP campaign keeps for a dying target's capture
+RING_RECORDS = 100_000       # ... and at most this many datagram events
+RESTART_TIMEOUT = 120.0      # s a --restart-cmd may run
+RESTART_ATTEMPTS = 12        # restarts minimising one crash case may spend
 # What a hand-edited case can make a mode's replay raise (bad types or values in its steps).
 MALFORMED = (ValueError, TypeError, KeyError, AttributeError, IndexError, OverflowError, struct.error)
 MAV_AUTOPILOT_INVALID = 8    # what a GCS puts in its HEARTBEAT
@@ -50,6 +65,9 @@ class CampaignOptions:
     time_s: float | None = None     # ... or after this much wall time (whichever comes first)
     findings_dir: str = "fuzz-findings"
     database: Any = None            # a Hypothesis ExampleDatabase, or None for none
+    profile: str | None = None      # UDP targets: the vehicle profile the oracles apply
+    restart_cmd: str | None = None  # a shell command that restarts a crashed target
+    restart_timeout: float = RESTART_TIMEOUT
 
 
 @dataclass
@@ -73,6 +91,7 @@ class Finding:
     capture: Path | None             # the MCAP of its replay
     replayed: Violation | None       # what replaying it showed (None: it did not reproduce)
     exchange: list[dict[str, Any]]   # the replay's frames, as report events
+    note: str = ""                   # how it was saved when that is not the usual way
 
     @property
     def reproduced(self) -> bool:
@@ -93,32 +112,55 @@ class CampaignResult:
 
 def run_campaign(options: CampaignOptions,
                  on_progress: Callable[[Progress], None] | None = None) -> CampaignResult:
+    """Search, then save what was found. Raises `TargetUnresponsive` (no HEARTBEAT at the
+    start) and `ToolError` (an exception of ours, with the case that caused it)."""
     from conformance.target_uri import parse_target
 
-    parse_target(options.target)     # a bad URI is the user's mistake: say so before searching
+    uri = parse_target(options.target)   # a bad URI is the user's mistake: say so before searching
+    if options.profile is not None:
+        if uri.in_process:
+            raise UsageError(f"--profile applies to udp:/udpin: targets; {options.target} is held to "
+                             "its own profile")
+        from reference_impl.profiles import load_profile
+        load_profile(options.profile)    # a bad name or file: say so before searching
     mode = load_mode(options.mode)
     started = dt.datetime.now(dt.timezone.utc)
     progress = Progress()
+    deadline = None if options.time_s is None else progress.started + options.time_s
+    ring = None if uri.in_process else RingCapture()
 
     def example_done(units: int) -> None:
         progress.examples += 1
         progress.units += units
+        if deadline is not None:     # shrinking what an example found gets what is left
+            set_shrink_time_limit(min(SHRINK_LIMIT, deadline - time.monotonic()))
         if on_progress is not None:
             on_progress(progress)
 
-    # A time budget bounds the search; shrinking what it found gets half as long again.
-    shrink = SHRINK_LIMIT if options.time_s is None else min(SHRINK_LIMIT, max(2.0, options.time_s / 2))
-    with shrink_time_limit(shrink):
-        cases = mode.search(options.target, seed=options.seed, max_examples=options.examples,
-                            stop_after=options.time_s, database=options.database,
-                            on_example=example_done)
+    shrink = SHRINK_LIMIT if options.time_s is None else min(SHRINK_LIMIT, options.time_s)
+    extra: dict[str, Any] = {"capture": ring}
+    if options.profile is not None:
+        extra["profile"] = options.profile
+    try:
+        with shrink_time_limit(shrink):
+            cases = mode.search(options.target, seed=options.seed, max_examples=options.examples,
+                                stop_after=options.time_s, database=options.database,
+                                on_example=example_done, **extra)
+    except ToolError as exc:
+        exc.saved = save_tool_failure(exc.failure, options, options.findings_dir)
+        raise
     duration = progress.elapsed
+    until = time.monotonic() + SHRINK_LIMIT if deadline is None else max(deadline, time.monotonic() + SAVE_GRACE)
+    restarter = Restarter(options.restart_cmd, options.restart_timeout) if options.restart_cmd else None
     findings = []
     for case in cases:
         case = Case(case.mode, case.target, case.seed, case.steps, case.violation,
-                    {**case.found_by, "campaign_seed": options.seed})
-        findings.append(save_finding(mode, case, options.findings_dir,
-                                     minimise_until=time.monotonic() + shrink))
+                    {**case.found_by, "campaign_seed": options.seed,
+                     **({"profile": options.profile} if options.profile else {})})
+        if ring is not None and case.violation is not None and case.violation.invariant in DEATH_KINDS:
+            findings.append(save_death(mode, case, options.findings_dir, ring, restarter, until=until))
+        else:
+            findings.append(save_finding(mode, case, options.findings_dir, minimise_until=until))
         progress.findings += 1
         if on_progress is not None:
             on_progress(progress)
@@ -127,6 +169,16 @@ def run_campaign(options: CampaignOptions,
 
 
 MINIMISE_REPLAYS = 400       # bound on the replays the step-removal pass may spend per finding
+
+
+def set_shrink_time_limit(seconds: float) -> None:
+    """Change the bound while a search runs (Hypothesis reads it when shrinking begins)."""
+    try:
+        from hypothesis.internal.conjecture import engine
+    except ImportError:      # pragma: no cover
+        return
+    if hasattr(engine, "MAX_SHRINKING_SECONDS"):
+        engine.MAX_SHRINKING_SECONDS = max(0.5, seconds)
 
 
 @contextlib.contextmanager
@@ -194,6 +246,130 @@ def save_finding(mode: ModuleType, case: Case, directory: str | Path, *,
     mcap = path.with_suffix(".mcap")
     replayed, exchange = replay_recorded(mode, case, mcap)
     return Finding(case, path, mcap, replayed, exchange)
+
+
+class RingCapture:
+    """The last RING_SECONDS (at most RING_RECORDS events) of a live campaign's traffic:
+    what a dying target was sent and said before it fell silent."""
+
+    def __init__(self, seconds: float = RING_SECONDS, records: int = RING_RECORDS) -> None:
+        self.seconds = seconds
+        self.records: collections.deque[CaptureRecord] = collections.deque(maxlen=records)
+
+    def __call__(self, record: CaptureRecord) -> None:
+        self.records.append(record)
+        while self.records and self.records[0].time < record.time - self.seconds:
+            self.records.popleft()
+
+    def write(self, path: Path) -> list[dict[str, Any]]:
+        """Write the kept records as an MCAP file; return them as report events."""
+        recorder = ExchangeRecorder()
+        with contextlib.closing(McapCapture(path)) as capture:
+            for record in self.records:
+                capture(record)
+                recorder(record)
+        return recorder.events
+
+
+class Restarter:
+    """Runs the user's restart command (a shell command line, bounded) and waits for the
+    target's HEARTBEAT, so a crash case can be replayed and minimised."""
+
+    def __init__(self, command: str, timeout: float = RESTART_TIMEOUT) -> None:
+        self.command = command
+        self.timeout = timeout
+        self.runs = 0
+
+    def restart(self, target: str) -> str | None:
+        """None when the target is back; else why not (one line)."""
+        from conformance.target_uri import parse_target
+        from .protocol.connection import TargetConnection
+        from .outcomes import TargetUnresponsive
+
+        self.runs += 1
+        try:
+            done = subprocess.run(self.command, shell=True, timeout=self.timeout, check=False,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        except subprocess.TimeoutExpired:
+            return f"--restart-cmd did not finish within {self.timeout:g} s"
+        except OSError as exc:
+            return f"--restart-cmd could not run: {exc.strerror or exc}"
+        if done.returncode != 0:
+            last = (done.stderr or "").strip().splitlines()[-1:] or [""]
+            return f"--restart-cmd exited {done.returncode}" + (f": {last[0][:160]}" if last[0] else "")
+        try:
+            TargetConnection(parse_target(target), discovery_timeout=self.timeout).close()
+        except TargetUnresponsive as exc:
+            return f"after --restart-cmd: {exc}"
+        return None
+
+
+def save_death(mode: ModuleType, case: Case, directory: str | Path, ring: RingCapture,
+               restarter: Restarter | None, *, until: float) -> Finding:
+    """A UDP target that stopped answering: save the case and the live capture first (the
+    finding must never be lost), then, given a restart hook and time, confirm it by replay
+    and minimise it with a restart before every attempt."""
+    path = save_case(case, directory)
+    exchange = ring.write(path.with_suffix(".mcap"))
+    if restarter is None:
+        return Finding(case, path, path.with_suffix(".mcap"), None, exchange,
+                       note="saved unminimised and not replayed: a replay needs a restarted target "
+                            "(give --restart-cmd)")
+    if time.monotonic() >= until:
+        return Finding(case, path, path.with_suffix(".mcap"), None, exchange,
+                       note="saved unminimised and not replayed: the --time budget was spent")
+    want = case.violation.invariant if case.violation else None
+
+    def attempt(trial: Case) -> Violation | None:
+        why = restarter.restart(trial.target)
+        if why is not None:
+            raise _RestartFailed(why)
+        return mode.replay(trial)
+
+    try:
+        again = attempt(case)
+        if again is None or again.invariant != want:
+            return Finding(case, path, path.with_suffix(".mcap"), again, exchange,
+                           note="saved unminimised: replayed after a restart, it did not die the same way")
+        steps = list(case.steps)
+        best = replace(case, violation=again)
+        for i in reversed(range(len(steps))):
+            if restarter.runs > RESTART_ATTEMPTS or time.monotonic() >= until:
+                break
+            trial = replace(case, steps=tuple(steps[:i] + steps[i + 1:]))
+            got = attempt(trial)
+            if got is not None and got.invariant == want:
+                steps = list(trial.steps)
+                best = replace(trial, violation=got)
+        why = restarter.restart(case.target)   # leave it running for the next user
+    except _RestartFailed as exc:
+        return Finding(case, path, path.with_suffix(".mcap"), None, exchange,
+                       note=f"saved unminimised and not replayed: {exc}")
+    note = (f"replayed after a restart: it died again; minimised from {len(case.steps)} to "
+            f"{len(best.steps)} step(s) ({restarter.runs} restarts)")
+    if why is not None:
+        note += f"; the last restart failed: {why}"
+    if best.steps != case.steps:
+        small = save_case(best, directory)
+        return Finding(best, small, path.with_suffix(".mcap"), best.violation, exchange,
+                       note=note + f"; the unminimised case is {path.name}")
+    return Finding(case, path, path.with_suffix(".mcap"), again, exchange, note=note)
+
+
+class _RestartFailed(Exception):
+    pass
+
+
+def save_tool_failure(failure: ToolFailure, options: CampaignOptions, directory: str | Path) -> Path:
+    """The steps that made mavconform raise, as a case (`--replay` runs it again, under a
+    debugger if need be), and the traceback beside it as NAME.txt."""
+    case = Case(options.mode, options.target, failure.seed, failure.steps, None,
+                {"campaign_seed": options.seed, "tool_error": failure.error})
+    path = save_case(case, directory)
+    named = path.with_name(path.name.replace(f"{options.mode}-case-", f"{options.mode}-tool-error-"))
+    path.replace(named)
+    named.with_suffix(".txt").write_text(failure.trace, encoding="utf-8")
+    return named
 
 
 def replay_recorded(mode: ModuleType, case: Case,

@@ -30,7 +30,7 @@ MODES = ("protocol", "frames")
 class Violation:
     """A broken oracle, in plain words: which invariant, and what was seen."""
 
-    invariant: str            # a short stable name, e.g. "atomic-upload", "still-answers"
+    invariant: str            # a short stable name, e.g. "atomic-upload", "target-crash"
     detail: str               # one or two sentences a reader understands without the source
     step: int | None = None   # index of the step after which it was seen (None: at the end)
 

@@ -9,19 +9,28 @@ outside 0/1), and, at plan level, a `seq` or `mission_type` that is not what the
 expects (gaps, repeats, seq 65535, another plan type). Dicts, because the `MissionItem`
 model is the vehicle's canonical form and a fuzz item is exactly what it refuses to be.
 
+Floats that are valid float32 but out of range for the integers autopilots convert them to
+(`OUT_OF_RANGE`: 1e10, +-inf, NaN, 215 deg, 2^31, ...) reach every float field of
+MISSION_ITEM: params and z through `edge_f32`; x and y, which a MISSION_ITEM_INT carries as
+int32, through a wire item's "fx"/"fy" keys (`float_wire_item`: what goes out in
+MISSION_ITEM.x/y instead of the int x/y converted, in "float" uploads) and through the x/y
+of stray MISSION_ITEMs (`float_item_fields`).
+
 The protocol fuzzer's steps are JSON-safe dicts (they are what a saved case replays);
 their vocabulary is documented in `fuzz/protocol/steps.py` and drawn here.
 """
 
 from __future__ import annotations
 
+import math
 import struct
+from functools import lru_cache
 from typing import Any
 
 from hypothesis import strategies as st
 
 from reference_impl.mission.constants import (
-    FENCE_COMMANDS, MISSION_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
+    FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
 )
 from reference_impl.mission.items import (
     FRAME_MISSION, GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, PLAN_TYPES, MissionItem,
@@ -97,10 +106,56 @@ FLT_SUBNORMAL_MAX = _f32(0x007FFFFF)
 F32_EDGES = (float("nan"), float("inf"), float("-inf"), 0.0, -0.0, 1.0, -1.0, FLT_MAX, -FLT_MAX,
              FLT_MIN_NORMAL, FLT_SUBNORMAL_MIN, -FLT_SUBNORMAL_MIN, FLT_SUBNORMAL_MAX, _f32(0x7FC00001))
 
+# Floats a float32 field carries exactly (so the wire delivers them unchanged) that no
+# integer the receiver converts them to can hold. Autopilots turn MISSION_ITEM's floats into
+# integers: latitude/longitude degrees * 1e7 into int32 degE7, local metres * 1e4 into
+# int32, altitudes into int32 cm or mm, params used as indices or counts (DO_JUMP's target
+# seq and repeat count, a fence polygon's vertex count) into int32/uint16/uint32. In C a
+# float-to-int conversion of a value out of the integer's range (NaN and +-inf included) is
+# undefined behaviour: on ARM it saturates, on x86 it gives INT_MIN, either way a stored
+# value nobody sent. Each value with the conversion it breaks:
+OUT_OF_RANGE: tuple[tuple[float, str], ...] = (
+    (math.nan, "no integer at all; and every comparison with it is false, so a range check "
+               "written as `v < lo || v > hi` lets it through"),
+    (math.inf, "no integer: converting it is undefined in C, so a range check done after the "
+               "conversion checks INT32_MIN (x86) or INT32_MAX (ARM) instead"),
+    (-math.inf, "as +inf, downwards"),
+    (1e10, "2^10 * 5^10, exact in float32: overflows int32 in every conversion (degE7 1e17, "
+           "local 1e14, cm 1e12, mm 1e13, or taken as a plain integer)"),
+    (-1e10, "as 1e10, downwards"),
+    (215.0, "the first whole degree whose degE7 overflows int32 (2.15e9 > INT32_MAX; the limit "
+            "is 214.7483647 deg): a longitude/latitude check done after the conversion sees a "
+            "wrapped value"),
+    (-215.0, "as 215, downwards (-2.15e9 < INT32_MIN)"),
+    (214749.0, "the first whole metre whose local-frame value (metres * 1e4) overflows int32 "
+               "(2147490000 > INT32_MAX); fits a plain int32, so only the scaled path breaks"),
+    (2147484.0, "the first whole metre whose altitude in mm overflows int32 (2147484000)"),
+    (21474838.0, "the first float32 whole metre whose altitude in cm overflows int32 "
+                 "(2147483800; 21474837 is no float32)"),
+    (65536.0, "UINT16_MAX + 1: a seq, jump target or count kept in 16 bits wraps to 0"),
+    (2.0**31, "INT32_MAX + 1: an index or count kept in int32 overflows by one (and "
+              "(float)INT32_MAX rounds to it, so `v <= (float)INT32_MAX` lets it through)"),
+    (-2.0**31 - 256, "the float32 just below INT32_MIN (float32 spacing there is 256): "
+                     "overflows int32 downwards; INT32_MIN itself still fits"),
+    (3e9, "fits uint32 but not int32: a signed/unsigned mix-up stores it negative"),
+    (2.0**32, "UINT32_MAX + 1: overflows uint32 too"),
+    (FLT_MAX, "the largest finite float32: overflows every integer, and * 1e7 in float32 "
+              "arithmetic is inf"),
+    (-FLT_MAX, "as FLT_MAX, downwards"),
+)
+OUT_OF_RANGE_F32: tuple[float, ...] = tuple(v for v, _ in OUT_OF_RANGE)
+out_of_range_f32 = st.sampled_from(OUT_OF_RANGE_F32)
+
 subnormal_f32 = st.floats(-FLT_MIN_NORMAL, FLT_MIN_NORMAL, width=32, exclude_min=True,
                           exclude_max=True).filter(lambda v: v != 0.0)
-# Every float32 a field can carry, biased to the values that break parsers and validators.
-edge_f32 = st.one_of(st.sampled_from(F32_EDGES), subnormal_f32, st.floats(width=32))
+# Every float32 a field can carry, biased to the values that break parsers, validators and
+# the float-to-integer conversions after them (`OUT_OF_RANGE`; its NaN, +-inf and +-FLT_MAX
+# are edges already). A second NaN branch here made two same-seed searches in one process
+# shrink differently (seen with Hypothesis 6.170, whose shrinker compares values nested in
+# dicts with ==, and NaN != NaN), so only the values F32_EDGES lacks are added.
+_BEYOND_EDGES = tuple(v for v in OUT_OF_RANGE_F32 if v == v and v not in F32_EDGES)
+edge_f32 = st.one_of(st.sampled_from(F32_EDGES), st.sampled_from(_BEYOND_EDGES), subnormal_f32,
+                     st.floats(width=32))
 
 
 def edge_ints(lo: int, hi: int, *extra: int) -> st.SearchStrategy[int]:
@@ -165,6 +220,97 @@ def wire_item(mission_type: MissionType) -> st.SearchStrategy[dict[str, Any]]:
     return st.one_of(valid_wire_item(mission_type), edge_wire_item(mission_type))
 
 
+# --- float MISSION_ITEM: every float32 field out of range -----------------------------------
+
+# MISSION_ITEM's float32 fields (MISSION_ITEM_INT carries x and y as int32).
+FLOAT_FIELDS = ("param1", "param2", "param3", "param4", "x", "y", "z")
+# Wire-item keys that replace MISSION_ITEM's x/y (fuzz/protocol/gcs.py applies them).
+XY_OVERRIDES = {"x": "fx", "y": "fy"}
+# Where x/y mean a position and how the vehicle scales them, or mean nothing at all.
+XY_KINDS = ("global", "local", "no-location")
+NO_LOCATION_COMMANDS = (Cmd.DO_CHANGE_SPEED, Cmd.CONDITION_DELAY)   # x/y are params 5/6
+# Inside int32 after the conversion, outside the valid range: the validator's job, not the
+# conversion's (a global frame's 91 deg latitude, 181 deg longitude).
+PAST_RANGE_XY = (91.0, -91.0, 181.0, -181.0)
+# In-range x/y whose conversion is exact: k / 2^m where 2^m divides the frame's scale (1e7 =
+# 2^7 * 5^7, 1e4 = 2^4 * 5^4, 1), so rounding, truncation and flooring all give the same
+# integer and a correct vehicle can store only one value.
+_EXACT_XY = {   # (kind, axis) -> (largest magnitude, 2^m)
+    ("global", "x"): (90, 128), ("global", "y"): (180, 128),
+    ("local", "x"): (100_000, 16), ("local", "y"): (100_000, 16),
+    ("no-location", "x"): (1_000_000, 1), ("no-location", "y"): (1_000_000, 1),
+}
+
+
+@lru_cache(maxsize=None)
+def exact_xy(kind: str, axis: str) -> st.SearchStrategy[float]:
+    """In-range x or y of an item of `kind` whose conversion to the int form is exact."""
+    limit, denominator = _EXACT_XY[(kind, axis)]
+    return st.integers(-limit * denominator, limit * denominator).map(lambda k: k / denominator)
+
+
+# A float field pushed to its edges, most often out of every integer's range.
+out_of_range_or_edge = st.one_of(out_of_range_f32, edge_f32)
+_PARAMS_Z = ("param1", "param2", "param3", "param4", "z")
+_SOME_XY = st.lists(st.sampled_from(("x", "y")), min_size=1, max_size=2, unique=True)
+_FEW_PARAMS_Z = st.lists(st.sampled_from(_PARAMS_Z), max_size=2, unique=True)
+_ANY_PARAMS_Z = st.lists(st.sampled_from(_PARAMS_Z), max_size=5, unique=True)
+
+
+@lru_cache(maxsize=None)   # drawn from inside composites: build each strategy once
+def float_xy(kind: str, axis: str) -> st.SearchStrategy[float]:
+    """What a MISSION_ITEM may carry in x or y for an item of `kind`: out-of-range values,
+    in-range ones the vehicle converts exactly, values just past the valid range, the float32
+    edges. No arbitrary in-range float: whether a vehicle rounds or truncates it is no
+    protocol matter, and the oracle could then expect the wrong one of two integers."""
+    return st.one_of(out_of_range_f32, st.one_of(exact_xy(kind, axis), st.sampled_from(PAST_RANGE_XY)),
+                     st.one_of(st.sampled_from(F32_EDGES), subnormal_f32))
+
+
+@st.composite
+def float_wire_item(draw, mission_type: MissionType) -> dict[str, Any]:
+    """A wire item for a float upload (MISSION_ITEM) with its float32 fields pushed out of
+    range: x and/or y as "fx"/"fy" keys, the floats that go out in MISSION_ITEM.x/y instead
+    of the item's int x/y converted (a MISSION_ITEM_INT of the same item keeps its int x/y;
+    an in-range override is converted exactly), and up to two of the params and z as
+    themselves. The item has a location in a global frame (x/y degrees, * 1e7 on the
+    vehicle), in a local frame (metres, * 1e4), or none: a command whose x/y are plain
+    params 5/6 in MAV_FRAME_MISSION (DO_CHANGE_SPEED, CONDITION_DELAY)."""
+    kind = draw(st.sampled_from(XY_KINDS))
+    fields = item_fields(draw(mission_item(mission_type)))
+    if kind == "no-location":
+        fields.update(frame=FRAME_MISSION, command=int(draw(st.sampled_from(NO_LOCATION_COMMANDS))))
+    else:
+        if mission_type is MissionType.MISSION and fields["command"] not in POSITIONAL_COMMANDS:
+            fields.update(command=int(Cmd.NAV_WAYPOINT), param1=0.0)
+        fields["frame"] = draw(GLOBAL if kind == "global" else st.sampled_from(sorted(LOCAL_FRAMES)))
+    fields.update(draw(_FLOAT_OVERRIDES[kind]))
+    return fields
+
+
+@st.composite
+def float_overrides(draw, kind: str) -> dict[str, float]:
+    """What a `float_wire_item` of `kind` carries instead of its own floats: "fx" and/or
+    "fy" (`float_xy`), and up to two of the params and z, out of range most often."""
+    out = {XY_OVERRIDES[axis]: draw(float_xy(kind, axis)) for axis in draw(_SOME_XY)}
+    for name in draw(_FEW_PARAMS_Z):
+        out[name] = draw(out_of_range_or_edge)
+    return out
+
+
+_FLOAT_OVERRIDES = {kind: float_overrides(kind) for kind in XY_KINDS}
+
+
+@st.composite
+def float_item_fields(draw) -> dict[str, float]:
+    """Float fields of a stray MISSION_ITEM: x and y always (a float32 carries them, not
+    the int they stand for), params and z some of the time, out of range most often."""
+    fields = {"x": draw(out_of_range_or_edge), "y": draw(out_of_range_or_edge)}
+    for name in draw(_ANY_PARAMS_Z):
+        fields[name] = draw(out_of_range_or_edge)
+    return fields
+
+
 SEQ_FAULTS = ("gap", "repeat", "far", "other-type")
 
 
@@ -207,7 +353,7 @@ _prob = st.floats(0, 1).map(lambda p: round(p, 3))
 
 
 @st.composite
-def fault_schedules(draw, max_loss: float = 0.3) -> dict[str, Any]:
+def fault_schedules(draw, max_loss: float = 0.3, max_burst: float = 30.0) -> dict[str, Any]:
     """One direction's faults: random loss, duplication, reordering, delay, jitter and
     corruption; bursts (short total outages, `[start, length]` seconds after the schedule
     is set); scripted drops ("the 2nd MISSION_ACK", "MISSION_ITEM_INT from the 3rd on");
@@ -222,7 +368,7 @@ def fault_schedules(draw, max_loss: float = 0.3) -> dict[str, Any]:
         "jitter": round(draw(st.floats(0, 0.05)), 3),
         "corrupt": round(draw(st.floats(0, 0.05)), 3),
         "bursts": [[round(s, 2), round(n, 2)] for s, n in draw(st.lists(
-            st.tuples(st.floats(0, 20), st.floats(0.05, 30)), max_size=2))],
+            st.tuples(st.floats(0, min(20.0, max_burst)), st.floats(0.05, max_burst)), max_size=2))],
         "drops": draw(st.lists(st.fixed_dictionaries({
             "name": st.sampled_from(MISSION_MESSAGES), "nth": st.integers(1, 6),
             "onwards": st.booleans()}), max_size=2)),
@@ -241,11 +387,20 @@ clear_type = st.sampled_from([int(t) for t in PLAN_TYPES] + [int(MissionType.ALL
 
 @st.composite
 def upload_op(draw, max_items: int = 20, *, edges: bool = True, min_items: int = 0) -> dict[str, Any]:
+    """An upload; about one in five "float" (MISSION_ITEM), and three in four of those
+    (with `edges`) with one or two `float_wire_item`s spliced in: out-of-range floats in the
+    float fields, x/y included, inside a transfer. Shrinking drops them (the choice shrinks
+    to none)."""
     t = draw(plan_type)
-    op = {"op": "upload", "type": t,
-          "items": draw(wire_plan(MissionType(t), max_items, edges=edges, min_size=min_items))}
-    if draw(st.integers(0, 7)) == 7:
+    items = draw(wire_plan(MissionType(t), max_items, edges=edges, min_size=min_items))
+    op = {"op": "upload", "type": t, "items": items}
+    if draw(st.integers(0, 4)) == 4:
         op["float"] = True   # answer with MISSION_ITEM (float x/y) even when asked for _INT
+        if edges and items and draw(st.integers(0, 3)) > 0:
+            for index, item in draw(st.lists(st.tuples(st.integers(0, len(items) - 1),
+                                                       float_wire_item(MissionType(t))),
+                                             min_size=1, max_size=2)):
+                items[index] = item
     return op
 
 
@@ -305,8 +460,8 @@ def raw_message(draw) -> dict[str, Any]:
         t = draw(st.sampled_from(PLAN_TYPES))
         fields = dict(draw(wire_item(t)), seq=draw(st.one_of(st.integers(0, 60), edge_u16)),
                       mission_type=draw(st.one_of(st.just(int(t)), _any_type)))
-        if name == "MISSION_ITEM":   # float x/y: anything a float32 holds
-            fields["x"], fields["y"] = draw(edge_f32), draw(edge_f32)
+        if name == "MISSION_ITEM":   # float x/y: anything a float32 holds; any float field out of range
+            fields.update(draw(float_item_fields()))
     elif name in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
         fields = {"seq": draw(st.one_of(st.integers(0, 60), edge_u16)), "mission_type": draw(_any_type)}
     elif name == "MISSION_COUNT":
@@ -331,9 +486,9 @@ def stray_step(max_items: int = 20, max_after: float = 4.0) -> st.SearchStrategy
         "during": st.one_of(st.none(), operations(max_items)), "after": seconds(max_after)})
 
 
-def faults_step(max_loss: float = 0.3) -> st.SearchStrategy[dict[str, Any]]:
+def faults_step(max_loss: float = 0.3, max_burst: float = 30.0) -> st.SearchStrategy[dict[str, Any]]:
     """New faults on GCS A's link: `up` (A -> vehicle) and `down`; null is a clean direction."""
-    direction = st.one_of(st.none(), fault_schedules(max_loss))
+    direction = st.one_of(st.none(), fault_schedules(max_loss, max_burst))
     return st.fixed_dictionaries({"op": st.just("faults"), "up": direction, "down": direction})
 
 

@@ -8,9 +8,14 @@ import time
 from pathlib import Path
 from typing import Any
 
-from fuzz.campaign import MODES, CampaignOptions, Progress, load_mode, parse_duration, replay_recorded, run_campaign
+from fuzz.campaign import (MODES, RESTART_TIMEOUT, CampaignOptions, Progress, load_mode, parse_duration,
+                           replay_recorded, run_campaign)
 from fuzz.case import load_case
+from fuzz.outcomes import TargetUnresponsive, ToolError
 from reference_impl.errors import UsageError
+
+EXIT_FINDING = 1
+EXIT_TOOL_ERROR = 3
 
 DESCRIPTION = """\
 Fuzz a mission implementation and save what breaks it.
@@ -32,7 +37,16 @@ with NAME.mcap (the capture of its replay); `mavconform fuzz --replay FINDINGS/N
 runs it again. The campaign also writes fuzz.json / .junit.xml / .md / .html to --report-dir,
 one row per invariant.
 
-Exit codes: 0 no finding; 1 a finding (or, with --replay, the case still fails); 2 usage.
+A real target (udp:, udpin:) is judged by the rules of --profile, by default the builtin
+profile of the autopilot its HEARTBEAT names (px4, ardupilot; else the spec). A target that
+stops answering is a target-crash (no HEARTBEAT either) or target-hang finding: the campaign
+stops and saves the last steps with the capture of the live traffic. Replaying and
+minimising it needs the target restarted: give --restart-cmd, run (bounded) before every
+attempt; without it the case is saved unminimised and says so.
+
+Exit codes: 0 no finding; 1 a finding (or, with --replay, the case still fails), or the
+target never answered; 2 usage; 3 a tool error (a bug in mavconform: the steps that led to
+it are saved for the bug report).
 """
 
 EPILOG = """\
@@ -41,6 +55,7 @@ examples:
   mavconform fuzz --target builtin:spec --mode frames --time 60s
   mavconform fuzz --target mutant:non-atomic-upload --examples 100     # a planted bug: found
   mavconform fuzz --target udpin:14550 --mode frames --time 5m          # a SITL that sends to us
+  mavconform fuzz --target udpin:14550 --time 5m --restart-cmd './restart-sitl.sh'
   mavconform fuzz --replay fuzz-findings/protocol-atomic-upload-1a2b3c4d5e.json
 across cores and machines: pytest --pyargs fuzz -n auto --fuzz-target builtin:spec (README)
 """
@@ -68,6 +83,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--database", default=".hypothesis/fuzz", metavar="DIR|none|redis://HOST:PORT",
                    help="Hypothesis example database shared by campaigns: a directory (default "
                         ".hypothesis/fuzz), 'none', or a Redis server for a fleet (needs hypothesis[redis])")
+    p.add_argument("--profile", metavar="NAME|FILE",
+                   help="udp:/udpin: targets: the vehicle profile whose rules the oracles apply (home in "
+                        "slot 0, compact storage, non-atomic upload, retries); default: from the "
+                        "HEARTBEAT autopilot (px4, ardupilot), else spec")
+    p.add_argument("--restart-cmd", metavar="CMD",
+                   help="shell command that restarts a target that died, so its case can be replayed "
+                        "and minimised (run before every attempt, bounded by --restart-timeout)")
+    p.add_argument("--restart-timeout", type=_seconds, default=RESTART_TIMEOUT, metavar="S",
+                   help=f"longest a --restart-cmd may run, and then the wait for HEARTBEAT "
+                        f"(default {RESTART_TIMEOUT:g})")
     p.add_argument("--replay", metavar="CASE.json",
                    help="run one saved case again (target and mode come from the case)")
     p.add_argument("--capture", metavar="FILE.mcap", help="with --replay: record the replay to this MCAP file")
@@ -88,7 +113,8 @@ def run(args: argparse.Namespace) -> int:
     examples = args.examples if args.examples is not None or args.time is not None else DEFAULT_EXAMPLES
     options = CampaignOptions(target=args.target, mode=args.mode, seed=args.seed, examples=examples,
                               time_s=args.time, findings_dir=args.findings,
-                              database=open_database(args.database))
+                              database=open_database(args.database), profile=args.profile,
+                              restart_cmd=args.restart_cmd, restart_timeout=args.restart_timeout)
     budget = " and ".join(x for x in (f"{examples} examples" if examples is not None else "",
                                       f"{args.time:g} s" if args.time is not None else "") if x)
     print(f"mavconform fuzz: {args.mode} mode against {args.target}, seed {args.seed}, "
@@ -97,6 +123,17 @@ def run(args: argparse.Namespace) -> int:
     bar = None if args.quiet else ProgressLine(unit, sys.stderr)
     try:
         result = run_campaign(options, bar)
+    except TargetUnresponsive as exc:
+        print(f"mavconform fuzz: target unresponsive: {exc}; nothing was fuzzed", file=sys.stderr)
+        return EXIT_FINDING
+    except ToolError as exc:
+        saved = getattr(exc, "saved", None)
+        print(f"mavconform fuzz: tool error (a bug in mavconform, not a finding about the target): "
+              f"{exc.failure.error}", file=sys.stderr)
+        if saved is not None:
+            print(f"  the steps that led to it: {saved} (traceback: {saved.with_suffix('.txt')}); "
+                  f"replay: mavconform fuzz --replay {saved}", file=sys.stderr)
+        return EXIT_TOOL_ERROR
     finally:
         if bar is not None:
             bar.done()
@@ -115,15 +152,18 @@ def run(args: argparse.Namespace) -> int:
     for f in result.findings:
         print(f"  {f.case.violation}")
         print(f"    {len(f.case.steps)} step(s), saved {f.path} (+ {f.capture.name if f.capture else 'no capture'})"
-              + ("" if f.reproduced else "  [WARNING: its replay did not reproduce it]"))
+              + ("" if f.reproduced or f.note else "  [WARNING: its replay did not reproduce it]"))
+        if f.note:
+            print(f"    {f.note}")
         print(f"    replay: {replay_command(f)}")
     print(f"reports in {paths['json'].parent}/")
     return 1
 
 
 def _replay(args: argparse.Namespace) -> int:
-    if args.examples is not None or args.time is not None:
-        raise UsageError("--replay runs one saved case: --examples and --time do not apply")
+    if args.examples is not None or args.time is not None or args.restart_cmd or args.profile:
+        raise UsageError("--replay runs one saved case: --examples, --time, --profile and --restart-cmd "
+                         "do not apply (the case names its profile; restart the target yourself)")
     case = load_case(args.replay)
     mode = load_mode(case.mode)
     print(f"mavconform fuzz: replaying {args.replay} ({case.mode} mode, {len(case.steps)} step(s), "
@@ -134,6 +174,10 @@ def _replay(args: argparse.Namespace) -> int:
         violation, _ = replay_recorded(mode, case, Path(args.capture) if args.capture else None)
     except UsageError as exc:
         raise UsageError(f"{args.replay}: {exc}") from None
+    except TargetUnresponsive as exc:
+        print(f"mavconform fuzz: target unresponsive: {exc}; nothing was replayed (restart it first)",
+              file=sys.stderr)
+        return EXIT_FINDING
     if violation is None:
         print("  replayed: no invariant broke (fixed, or the target differs from the one it was found on)")
         return 0
@@ -221,6 +265,16 @@ def _count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r} must be at least 1")
+    return value
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not 0 < value <= 3600:
+        raise argparse.ArgumentTypeError(f"{text!r} must be more than 0 and at most 3600 seconds")
     return value
 
 

@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+from typing import Any
 
+from reference_impl.errors import UsageError
 from reference_impl.mission.items import MissionType
 from reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
 from reference_impl.profiles import BUILTIN_PROFILES, load_profile
@@ -44,6 +46,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--profile", default="spec", metavar="NAME|FILE",
                    help=f"vehicle profile: {', '.join(BUILTIN_PROFILES)} or a profile TOML file "
                         "(default %(default)s)")
+    p.add_argument("--mutant", metavar="NAME",
+                   help="serve a mutant (a vehicle with one planted bug, `mavconform clauses --mutants`) "
+                        "instead of a profile's vehicle: to try a GCS or a fuzz campaign on a known bug")
     p.add_argument("--system", type=mavlink_id, default=1, help="system id (default 1)")
     p.add_argument("--component", type=mavlink_id, default=1, help="component id (default 1)")
     p.add_argument("--capacity", type=seq_number, metavar="N",
@@ -73,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
                                  single_peer_link=args.single_peer)
     faults = fault_model(args)
     clock = MonotonicClock()
-    vehicle = VehicleNode(config, wall_clock=clock.wall)
+    vehicle = _mutant(args.mutant, config, args.profile) if args.mutant else VehicleNode(config, wall_clock=clock.wall)
     with UdpDriver(clock=clock, seed=args.seed) as driver:
         address = driver.add_node(vehicle, bind=listen.address, outgoing=faults, incoming=faults)
         if connect is not None:
@@ -83,6 +88,15 @@ def run(args: argparse.Namespace) -> int:
                   f"udp:{address[0]}:{address[1]} (faults: {describe_faults(args)})", flush=True)
             _serve(driver, vehicle, clock, args)
     return 0
+
+
+def _mutant(name: str, config: Any, profile: str) -> VehicleNode:
+    from conformance.mutants import MUTANTS
+    if profile != "spec":
+        raise UsageError("--mutant and --profile: a mutant is the spec vehicle with one bug")
+    if name not in MUTANTS:
+        raise UsageError(f"unknown mutant {name!r} (see `mavconform clauses --mutants`)")
+    return MUTANTS[name].build(config)
 
 
 def _serve(driver: UdpDriver, vehicle: VehicleNode, clock: MonotonicClock, args: argparse.Namespace) -> None:

@@ -59,10 +59,14 @@ class StoredForm:
     def _compared(self, item: MissionItem) -> bool:
         return not (item.seq == 0 and self.home_slot_of(item.mission_type))
 
-    def canonical(self, item: MissionItem) -> MissionItem:
+    def canonical(self, item: MissionItem, *, stored: bool = False) -> MissionItem:
         """An item as any comparison sees it: stored form, plain frame, no `current` flag,
-        reserved params and flags the item type does not have left out."""
-        kept = STORAGE_FORMS[self.storage](item)
+        reserved params and flags the item type does not have left out. `stored`: the item
+        is in the stored form already (downloaded, or read from a store), and a storage
+        form is not applied twice: it need not be idempotent (ArduPilot keeps altitude in
+        truncated whole centimetres: 1.3125 m is stored as 131 cm, read back as the float
+        1.30999994, and that, sent again, is stored as 130 cm)."""
+        kept = item if stored else STORAGE_FORMS[self.storage](item)
         frame = PLAIN_FRAME.get(kept.frame, kept.frame)
         changes: dict[str, Any] = {"current": 0, "frame": frame}
         reserved = RESERVED_PARAMS.get(int(kept.command), ())
@@ -74,19 +78,29 @@ class StoredForm:
             changes["autocontinue"] = 0
         return replace(kept, **changes)
 
-    def same(self, got: Sequence[MissionItem], want: Sequence[MissionItem]) -> bool:
+    def stored_plan(self, plan: Sequence[MissionItem]) -> tuple[MissionItem, ...]:
+        """What the target keeps of a plan it accepts as sent."""
+        keep = STORAGE_FORMS[self.storage]
+        return tuple(keep(item) for item in plan)
+
+    def same(self, got: Sequence[MissionItem], want: Sequence[MissionItem], *,
+             want_stored: bool = False) -> bool:
+        """`got` (downloaded or read from the store: stored form) holds the plan `want`
+        (as sent; `want_stored`: read back too)."""
         if len(got) != len(want):
             return False
         canonical, compared = self.canonical, self._compared
-        return all(canonical(g) == canonical(w) for g, w in zip(got, want) if compared(w))
+        return all(canonical(g, stored=True) == canonical(w, stored=want_stored)
+                   for g, w in zip(got, want) if compared(w))
 
-    def differences(self, got: Sequence[MissionItem], want: Sequence[MissionItem]) -> list[str]:
+    def differences(self, got: Sequence[MissionItem], want: Sequence[MissionItem], *,
+                    want_stored: bool = False) -> list[str]:
         """Every field that differs, item by item, in the stored form ("" items when equal)."""
         out = []
         for g, w in zip(got, want):
             if not self._compared(w):
                 continue
-            cg, cw = self.canonical(g), self.canonical(w)
+            cg, cw = self.canonical(g, stored=True), self.canonical(w, stored=want_stored)
             if cg == cw:
                 continue
             fields = [f for f in _FIELDS if _differs(getattr(cg, f), getattr(cw, f))]
@@ -110,10 +124,15 @@ def form_of_behaviour(behaviour: Any, basis: str) -> StoredForm:
     return StoredForm(behaviour.home_at_seq0, behaviour.item_storage, basis)
 
 
+def profile_for_autopilot(autopilot: int | None) -> str | None:
+    """The builtin profile of the autopilot family a HEARTBEAT names (None: the spec)."""
+    return _AUTOPILOT_PROFILE.get(autopilot) if autopilot is not None else None
+
+
 def form_for_autopilot(autopilot: int | None) -> StoredForm:
     """The stored form of an external target, from its HEARTBEAT autopilot: the builtin
     profile of that family holds the facts (one place), the spec otherwise."""
-    name = _AUTOPILOT_PROFILE.get(autopilot) if autopilot is not None else None
+    name = profile_for_autopilot(autopilot)
     if name is None:
         return SPEC_FORM
     from reference_impl.profiles import load_profile

@@ -33,3 +33,17 @@ mutant("undefined-result-code", f"refuses an unknown mission_type with MISSION_A
        "which is no MAV_MISSION_RESULT", {"MIS.ERR.01"}, server_mutant(_UndefinedUnsupportedCode))
 mutant("busy-after-error", "after answering a request beyond the list with INVALID_SEQUENCE, keeps the "
        "download open", {"MIS.ERR.02"}, server_mutant(_BusyAfterInvalidRequest))
+
+
+class _DiesOnUnknownAckResult(MissionServer):
+    """Looks the GCS's MISSION_ACK result up in a table that has only the defined values,
+    as a C `switch` without a default might index an array: an undefined one raises. The
+    vehicle then dies (in its own process: the process exits with the traceback)."""
+
+    def _on_ack(self, msg, src, now):
+        MissionResult(msg.type)          # ValueError for a result code MAV_MISSION_RESULT lacks
+        return super()._on_ack(msg, src, now)
+
+
+mutant("dies-on-unknown-ack-result", "dies on a MISSION_ACK whose result code MAV_MISSION_RESULT does not "
+       "define (a planted crash for the fuzzers: no clause sends one)", set(), server_mutant(_DiesOnUnknownAckResult))

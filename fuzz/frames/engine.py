@@ -23,6 +23,7 @@ from hypothesis.errors import HypothesisException
 
 from conformance.target_uri import TargetUri, parse_target
 from fuzz.case import Case, Violation
+from fuzz.outcomes import TargetUnresponsive, ToolError, ToolFailure
 from reference_impl.errors import UsageError
 from reference_impl.net.sim import CaptureHook, stable_seed
 
@@ -61,11 +62,14 @@ def setup_step(signing: bool) -> dict[str, Any]:
     return {"setup": {"signing": signing}}
 
 
-def datagram_step(specs: list[FrameSpec], frames: list[bytes], neutralised: list[int]) -> dict[str, Any]:
+def datagram_step(specs: list[FrameSpec], frames: list[bytes], neutralised: list[int],
+                  filled: list[int] = ()) -> dict[str, Any]:
     out = []
     for i, (spec, frame) in enumerate(zip(specs, frames)):
         made = spec.describe()
-        if i in neutralised:
+        if i in filled:
+            made += " [replaced by filler: no checksum flip kept the target from accepting it]"
+        elif i in neutralised:
             made += " [checksum broken: the target would have accepted it]"
         out.append({"bytes": frame, "made": made})
     return {"send": out}
@@ -77,7 +81,8 @@ class FrameCampaign:
     def __init__(self, target: str, *, seed: int, max_examples: int | None = None,
                  stop_after: float | None = None, database: Any = None,
                  on_example: Callable[[int], None] | None = None, transport: str = "auto",
-                 max_frames: int = MAX_FRAMES, scale: float = 1.0) -> None:
+                 max_frames: int = MAX_FRAMES, scale: float = 1.0,
+                 capture: CaptureHook | None = None, profile: str | None = None) -> None:
         self.target = target
         self.uri: TargetUri = parse_target(target)
         if transport not in ("auto", "virtual", "udp"):
@@ -99,15 +104,21 @@ class FrameCampaign:
         self.frames_sent = 0
         self.neutralised = 0
         self.rig: Rig | None = None       # the live target of a UDP campaign
+        self.capture = capture            # sees the live traffic of a UDP campaign
+        self.profile = profile            # UDP targets: the profile whose stored form downloads are judged in
+        self.failure: ToolFailure | None = None   # an exception of ours ended the campaign
 
     # --- the campaign ---------------------------------------------------------------------
     def run(self) -> list[Case]:
         started = time.monotonic()
         if not self.virtual:
-            self.rig = Rig(self.uri, seed=self.seed, virtual=False, scale=self.scale)
+            self.rig = Rig(self.uri, seed=self.seed, virtual=False, scale=self.scale, capture=self.capture,
+                           profile=self.profile)
             v = self.rig.start()
             if v is not None:
                 self.rig.close()
+                if v.invariant == "target-crash" and self.rig.frames_sent == 0:
+                    raise TargetUnresponsive(v.detail)
                 return [self._case([setup_step(False)], v, shrunk=False)]
         try:
             chunk = 0
@@ -137,10 +148,16 @@ class FrameCampaign:
         @hypothesis.seed(stable_seed("frames", self.seed, index))
         @given(strategy)
         def example(drawn: tuple[bool, list[list[FrameSpec]]]) -> None:
+            if self.failure is not None:
+                return             # the campaign ends: no example runs after a tool failure
             budget[0] -= 1
             signed, program = drawn
-            steps, violation = (self._virtual_example(signed, program) if self.virtual
-                                else self._udp_example(program))
+            try:
+                steps, violation = (self._virtual_example(signed, program) if self.virtual
+                                    else self._udp_example(program))
+            except Exception as exc:   # noqa: BLE001 - ours, never a finding about the target
+                self.failure = ToolFailure.from_exception(exc, [setup_step(signed)], self.seed)
+                return
             if violation is not None:
                 exc = _found(violation, steps)
                 if not first:
@@ -151,6 +168,8 @@ class FrameCampaign:
             f"mavconform-frames/{self.target}/{self.seed}".encode())
         try:
             example()
+            if self.failure is not None:
+                raise ToolError(self.failure)
         except _Found as exc:
             found = exc
         except HypothesisException:
@@ -174,7 +193,7 @@ class FrameCampaign:
                 frames, fixed = builder.datagram(specs)
                 rig.send(frames)
                 rig.flush()
-                steps.append(datagram_step(specs, frames, fixed))
+                steps.append(datagram_step(specs, frames, fixed, builder.admission.last_filled))
                 violation = rig.crashed()
                 if violation is not None:
                     violation = dataclasses.replace(violation, step=len(steps) - 1)
@@ -191,7 +210,7 @@ class FrameCampaign:
         for specs in program:
             frames, fixed = builder.datagram(specs)
             rig.send(frames)
-            records.append((specs, frames, fixed))
+            records.append((specs, frames, fixed, list(builder.admission.last_filled)))
         before = rig.frames_sent
         rig.flush()
         violation = rig.crashed() or rig.check(lazy_heartbeat=True)
@@ -231,12 +250,14 @@ class FrameCampaign:
 
 def search(target: str, *, seed: int, max_examples: int | None = None, stop_after: float | None = None,
            database: Any = None, on_example: Callable[[int], None] | None = None,
-           transport: str = "auto") -> list[Case]:
+           transport: str = "auto", capture: CaptureHook | None = None,
+           profile: str | None = None) -> list[Case]:
     """Fuzz `target` with mutated frames; the shrunk findings (empty: none). `on_example`
     gets the number of frames each example sent. `transport="udp"` runs an in-process
     target over loopback sockets instead of virtual time (the benchmark's setting)."""
     return FrameCampaign(target, seed=seed, max_examples=max_examples, stop_after=stop_after,
-                         database=database, on_example=on_example, transport=transport).run()
+                         database=database, on_example=on_example, transport=transport,
+                         capture=capture, profile=profile).run()
 
 
 # --- replay --------------------------------------------------------------------------------

@@ -10,12 +10,27 @@ hears both).
 - Over UDP: one live target for the whole campaign (an in-process vehicle on loopback
   sockets, or a real one at `udp:` / `udpin:`), with real, bounded waits.
 
+The link, as the target's parser reads it: the fuzz datagrams and the oracle's own leave
+one socket, so they are one byte stream to a target that parses as the MAVLink C library
+does (admission.py, cparser.py). The station keeps the admission rule's stream model in
+step with it: every datagram that leaves for the target is fed to it in the order it is
+sent (`Admission.observe`), the oracle's frames are held back while a batch is being sent
+(`Rig.send` .. the end of `Rig.flush`), and before the oracle speaks after fuzz bytes that
+leave the parser mid-frame, a filler datagram (`Admission.resync`: bytes that are no frame
+start, completing that frame as one the target refuses) brings it back to IDLE. The filler
+is derived from the model alone, so a replay of a case's datagrams sends the same one; it
+is not a step of the case.
+
 The oracle, after a batch (`check`):
   no-exception        an in-process vehicle raised (GuardedNode caught it);
   plan-unchanged      an in-process vehicle's stored plans differ from the known ones;
-  still-answers       no HEARTBEAT from the target within HEARTBEAT_WAIT after the batch;
+  target-crash        no HEARTBEAT from the target within HEARTBEAT_WAIT after the batch;
   download-completes  a normal mission download failed, or returned another plan than the
-                      download made right after the known plan was uploaded.
+                      download made right after the known plan was uploaded, compared in
+                      the target's stored form (conformance/harness/stored_form.py: the
+                      `current` flag left out, home in slot 0 and compact storage where the
+                      target's autopilot family - its HEARTBEAT, or the in-process
+                      vehicle's profile - keeps them).
 """
 
 from __future__ import annotations
@@ -24,6 +39,8 @@ import hashlib
 from typing import Any
 
 from conformance.harness import plans
+from conformance.harness.stored_form import (SPEC_FORM, StoredForm, describe_differences,
+                                             form_for_autopilot, form_of_behaviour)
 from conformance.session import build_vehicle
 from conformance.target_uri import TargetUri
 from fuzz.case import Violation
@@ -65,7 +82,12 @@ def known_plans(in_process: bool) -> dict[MissionType, list]:
 
 
 class _Station:
-    """The oracle GCS plus the fuzzer's outbox, as one datagram node."""
+    """The oracle GCS plus the fuzzer's outbox, as one datagram node.
+
+    Sends the outbox first, then (unless `holding`: a batch is being sent) the GCS's
+    datagrams, preceded by the admission rule's resync filler when the fuzz bytes left the
+    target's parser mid-frame; every datagram for the target is fed to the rule's stream
+    model (`admission`, set once the campaign's builder exists) in that order."""
 
     def __init__(self, gcs: GcsNode, target_address: Address | None) -> None:
         self.gcs = gcs
@@ -73,6 +95,9 @@ class _Station:
         self.outbox: list[bytes] = []
         self.last_heartbeat: float | None = None
         self._heartbeat: Any = None
+        self.admission: Admission | None = None
+        self.holding = False
+        self._held: list[tuple[bytes, Address]] = []
 
     def datagram_received(self, data: bytes, source: Address, now: float) -> None:
         gcs = self.gcs
@@ -90,11 +115,29 @@ class _Station:
         return self.gcs.next_deadline()
 
     def take_outgoing(self) -> list[tuple[bytes, Address]]:
-        out = self.gcs.take_outgoing()
+        admission = self.admission
+        out: list[tuple[bytes, Address]] = []
         if self.outbox:
             to = self.target_address
-            out.extend((d, to) for d in self.outbox)
+            for d in self.outbox:
+                if admission is not None:
+                    admission.observe(d)
+                out.append((d, to))
             self.outbox = []
+        gcs = self.gcs.take_outgoing()
+        if self.holding:
+            self._held.extend(gcs)
+            return out
+        if self._held:
+            gcs = self._held + gcs
+            self._held = []
+        if gcs and admission is not None:
+            filler = admission.resync()
+            if filler is not None:
+                out.append((filler, self.target_address))
+            for d, _ in gcs:
+                admission.observe(d)
+        out.extend(gcs)
         return out
 
 
@@ -123,7 +166,9 @@ class Rig:
     """A connected target, ready for batches. Call `start()` first; `close()` at the end."""
 
     def __init__(self, uri: TargetUri, *, seed: int, signing: bool = False, virtual: bool = True,
-                 capture: CaptureHook | None = None, scale: float = 1.0) -> None:
+                 capture: CaptureHook | None = None, scale: float = 1.0,
+                 profile: str | None = None) -> None:
+        self.profile = profile   # a UDP target's stored form: this profile's (None: from its HEARTBEAT)
         if virtual and not uri.in_process:
             raise ValueError("virtual time needs an in-process target")
         if signing and uri.kind != "builtin":
@@ -139,6 +184,7 @@ class Rig:
         self.snapshot: Any = None
         self.plans = known_plans(uri.in_process)
         self.expected: tuple | None = None   # the mission as downloaded before the first batch
+        self.form: StoredForm = SPEC_FORM     # how the target stores plans (set in start)
         self.frames_sent = 0
         self.datagrams_sent = 0
         gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],
@@ -199,11 +245,20 @@ class Rig:
         if not self.driver.run_until(lambda: self.gcs.connected and station.target_address is not None
                                      and station.last_heartbeat is not None,
                                      timeout=DISCOVERY_WAIT * self.scale):
-            return Violation("still-answers", f"no HEARTBEAT from {self.uri} within "
+            return Violation("target-crash", f"no HEARTBEAT from {self.uri} within "
                              f"{DISCOVERY_WAIT * self.scale:g} s, before any fuzz frame was sent")
         self._target = self.gcs.target
+        if self.vehicle is not None:
+            self.form = form_of_behaviour(self.vehicle.config.behaviour, str(self.uri))
+        elif self.profile is not None:
+            from reference_impl.profiles import load_profile
+            self.form = form_of_behaviour(load_profile(self.profile).behaviour,
+                                          f"profile {self.profile} (--profile)")
+        else:
+            self.form = form_for_autopilot(getattr(self.gcs.target_heartbeat, "autopilot", None))
         admission = Admission(self.key, self.key is not None, self._ctx.wall_clock)
         self.builder = Builder(self._target, self._ctx, admission, sign_frames=self.key is not None)
+        station.admission = admission        # from now on every datagram to the target is fed to it
         for t, items in list(self.plans.items()):
             result = self._operation(lambda: self.session.upload(t, items))
             if result is None or not result.ok:
@@ -231,14 +286,22 @@ class Rig:
 
     # --- sending --------------------------------------------------------------------------
     def send(self, frames: list[bytes]) -> None:
-        """Queue one datagram (the frames back to back)."""
+        """Queue one datagram (the frames back to back); the oracle stays quiet until the
+        batch is flushed."""
+        self.station.holding = True
         self.station.outbox.append(b"".join(frames))
         self.frames_sent += len(frames)
         self.datagrams_sent += 1
 
     def flush(self) -> None:
         """Deliver what is queued: in virtual time, at once; over UDP, in chunks the target
-        can read (an in-process target is waited for, bounded)."""
+        can read (an in-process target is waited for, bounded). Then the oracle may speak."""
+        try:
+            self._flush()
+        finally:
+            self.station.holding = False
+
+    def _flush(self) -> None:
         if self.virtual:
             self.driver.run_until_quiet(timeout=0.0)
             return
@@ -277,7 +340,7 @@ class Rig:
         if v is not None:
             return v
         if not heard:
-            return Violation("still-answers", f"no HEARTBEAT from the target within {wait:g} s after the batch "
+            return Violation("target-crash", f"no HEARTBEAT from the target within {wait:g} s after the batch "
                              f"(it had sent them at 1 Hz before)")
         result = self._operation(lambda: self.session.download(MissionType.MISSION))
         v = self._crash_violation() or self._store_violation()
@@ -288,9 +351,9 @@ class Rig:
             what = "no result within the client's own bound" if result is None else result.summary()
             return Violation("download-completes", f"a normal mission download after the batch did not "
                              f"complete: {what}")
-        if result.items != want:
+        if not self.form.same(result.items, want, want_stored=True):
             return Violation("download-completes", "the mission downloaded after the batch is not the known "
-                             f"plan: {_plan_diff(want, result.items)}")
+                             f"plan: {_plan_diff(want, result.items, self.form)}")
         return None
 
     # --- internals ------------------------------------------------------------------------
@@ -320,11 +383,16 @@ class Rig:
         return None
 
 
-def _plan_diff(want: tuple, got: tuple | None) -> str:
+def _plan_diff(want: tuple, got: tuple | None, form: StoredForm | None = None) -> str:
+    """What differs: item counts, else (with `form`: in the target's stored form, every
+    field) the first differing item."""
     if got is None:
         return "nothing came back"
     if len(want) != len(got):
         return f"{len(got)} items instead of {len(want)}"
+    if form is not None:
+        diffs = form.differences(got, want, want_stored=True)
+        return f"{describe_differences(diffs) if diffs else 'equal'} (compared as: {form.describe()})"
     for a, b in zip(want, got):
         if a != b:
             return f"item {a.seq} differs ({b} instead of {a})"

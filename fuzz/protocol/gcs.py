@@ -6,7 +6,11 @@ ACKs, items nobody asked for, wrong ids) goes out raw through the same endpoint,
 vehicle sees it from the same GCS. An upload's wire items may carry a `seq` or
 `mission_type` other than the transfer's (seq gaps, another plan type): the client
 answers the vehicle's requests as usual and the node rewrites those fields on the way
-out.
+out (`outgoing`). A wire item's "fx"/"fy" are float overrides of x/y: when the item goes
+out as MISSION_ITEM (float x/y) they replace the x/y the client converted from the int
+ones, so out-of-range floats (1e10, NaN, +-inf, 215 deg) reach the vehicle inside a
+transfer. A MISSION_ITEM_INT of the same item keeps its int32 x/y: a float has no meaning
+there (its out-of-range ints are the wire item's own x/y).
 """
 
 from __future__ import annotations
@@ -28,6 +32,23 @@ MAV_TYPE_GCS = 6
 MAV_AUTOPILOT_INVALID = 8
 HEARTBEAT_PERIOD = 1.0
 _ITEMS = ("MISSION_ITEM_INT", "MISSION_ITEM")
+# Rewrite keys that stand for MISSION_ITEM's float x/y (and mean nothing for MISSION_ITEM_INT).
+FLOAT_XY = {"fx": "x", "fy": "y"}
+
+
+def outgoing(msg: Any, over: dict[str, Any]) -> Any:
+    """The copy of item message `msg` that goes out with the fields in `over` replaced.
+    "fx"/"fy" replace x/y of a MISSION_ITEM only; any other key names a field both item
+    messages have (seq, mission_type; a param or z, which are float32 in both) and is set
+    on either. The client keeps the original, to resend."""
+    msg = copy.copy(msg)
+    for name, value in over.items():
+        xy = FLOAT_XY.get(name)
+        if xy is None:
+            setattr(msg, name, value)
+        elif msg._type == "MISSION_ITEM":
+            setattr(msg, xy, float(value))
+    return msg
 
 
 class FuzzGcs:
@@ -49,7 +70,7 @@ class FuzzGcs:
         self.counts: dict[int, int] = {}    # mission_type -> first MISSION_COUNT to us since `listen()`
         self.client: MissionClient | None = None
         self.target: Peer | None = None
-        self._rewrite: dict[int, dict[str, int]] = {}
+        self._rewrite: dict[int, dict[str, Any]] = {}
         self._next_heartbeat: float | None = 0.0 if heartbeat else None
         if target is not None:
             self.set_target(target)
@@ -68,8 +89,10 @@ class FuzzGcs:
         return self.client is not None and self.client.busy
 
     def upload(self, mission_type: MissionType, items: Sequence[MissionItem],
-               rewrite: dict[int, dict[str, int]], *, as_float: bool, now: float) -> None:
-        """Upload `items`; item k goes out with the fields in `rewrite[k]` replaced."""
+               rewrite: dict[int, dict[str, Any]], *, as_float: bool, now: float) -> None:
+        """Upload `items`; item k goes out with the fields in `rewrite[k]` replaced
+        (`outgoing`: "fx"/"fy" only where it goes out as MISSION_ITEM). `as_float`: answer
+        MISSION_REQUEST_INT with MISSION_ITEM too."""
         client = self._client()
         self._rewrite = rewrite
         client.upload_int = not as_float
@@ -143,9 +166,7 @@ class FuzzGcs:
             if isinstance(action, Send):
                 msg = action.msg
                 if self._rewrite and msg._type in _ITEMS and msg.seq in self._rewrite:
-                    msg = copy.copy(msg)   # the client keeps the original to resend
-                    for name, value in self._rewrite[action.msg.seq].items():
-                        setattr(msg, name, value)
+                    msg = outgoing(msg, self._rewrite[msg.seq])
                 send(msg, action.to)
             elif isinstance(action, Finished):
                 self.results.append(action.result)

@@ -6,13 +6,20 @@ faults, wait. Each rule draws one step dict and hands it to the `Runner`, which 
 nothing Hypothesis does not also know: the machine keeps the list of steps it ran, so a
 failure carries the exact program that `replay` re-runs. Invariants are checked after
 every rule (and by `replay` after every step) through the same `Runner.check`.
+
+Over UDP a finding is not raised into Hypothesis: a live target does not repeat itself
+when Hypothesis runs the failing example again to report it (it raised
+`FlakyStrategyDefinition` against a crashed ArduPilot and the finding was lost). There the
+finding goes to the campaign's `CampaignState` and the campaign stops; every example after
+that is empty. An exception of our own (a `ToolFailure`) is recorded the same way, in
+every transport, and never taken for a finding about the target.
 """
 
 from __future__ import annotations
 
 import time
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from hypothesis import strategies as st
@@ -21,7 +28,11 @@ from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, ru
 from fuzz import strategies as fs
 
 from ..case import Violation
+from ..outcomes import DEATH_KINDS, ToolFailure
+from .connection import TargetConnection
 from .steps import Runner
+
+DEATH_CONTEXT_STEPS = 40   # steps kept before a target's death (this example's and the last one's)
 
 
 @dataclass(frozen=True)
@@ -35,6 +46,8 @@ class Knobs:
     faults: bool = True          # draw link-fault steps
     atomic: bool | None = None   # override the target profile's atomicity (None: profile's)
     max_wait: float = 20.0       # longest wait step, in protocol seconds (mid-operation cues: 4 s)
+    profile: str | None = None   # UDP targets: the vehicle profile whose rules the oracles use
+    max_burst: float = 30.0      # longest total link outage a faults step draws, in seconds
 
 
 class Finding(AssertionError):
@@ -44,6 +57,32 @@ class Finding(AssertionError):
     def __init__(self, violation: Violation, steps: list[dict[str, Any]], seed: int) -> None:
         super().__init__(str(violation))
         self.violation, self.steps, self.seed = violation, list(steps), seed
+
+
+@dataclass
+class CampaignState:
+    """What the examples of one campaign share: the UDP connection (None in-process), and
+    what ended the campaign when it is not raised into Hypothesis."""
+
+    connection: TargetConnection | None = None
+    findings: list[Finding] = field(default_factory=list)
+    failure: ToolFailure | None = None
+    previous_steps: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def side_channel(self) -> bool:
+        return self.connection is not None
+
+    @property
+    def stopped(self) -> bool:
+        return self.failure is not None or bool(self.findings)
+
+
+class CampaignOver(BaseException):
+    """Ends a UDP campaign's Hypothesis run at once (the budget is spent, or the campaign
+    has its finding). A BaseException, so Hypothesis neither takes it for a failure nor
+    replays the example: over UDP there is no shrinking to interrupt, and the examples it
+    would otherwise still draw and run empty cost up to half a second each."""
 
 
 _FINDING_TYPES: dict[str, type[Finding]] = {}
@@ -59,15 +98,17 @@ def finding_type(invariant: str) -> type[Finding]:
 
 def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = None,
                   on_finding: Callable[[Finding], None] | None = None,
-                  stop_at: float | None = None) -> type[RuleBasedStateMachine]:
+                  stop_at: float | None = None,
+                  state: CampaignState | None = None) -> type[RuleBasedStateMachine]:
     """A machine class for one campaign (strategies depend on the knobs). Past `stop_at`
     (time.monotonic) the rules do nothing, so an example running when a wall-time budget
     ends stops within one step: over UDP one example can take longer than the budget."""
     n = knobs.max_items
     after = min(4.0, knobs.max_wait)
+    shared = state if state is not None else CampaignState()
 
     def _spent() -> bool:
-        return stop_at is not None and time.monotonic() >= stop_at
+        return shared.stopped or (stop_at is not None and time.monotonic() >= stop_at)
 
     class ProtocolMachine(RuleBasedStateMachine):
         def __init__(self) -> None:
@@ -78,22 +119,49 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
 
         @initialize(seed=st.integers(0, 2**32 - 1))
         def connect(self, seed: int) -> None:
+            if _spent() and shared.side_channel:
+                raise CampaignOver()
             self.seed = seed
             if not _spent():   # past the budget the example is empty: no world to open
-                self.runner = Runner(knobs.target, seed, atomic=knobs.atomic)
+                self._guarded(lambda: setattr(self, "runner", Runner(
+                    knobs.target, seed, atomic=knobs.atomic, connection=shared.connection,
+                    profile=knobs.profile)))
 
         def _do(self, step: dict[str, Any]) -> None:
+            if _spent() and shared.side_channel:
+                raise CampaignOver()
             if _spent() or self.runner is None:
                 return
             self.steps.append(step)
-            self._raise(self.runner.apply(step))
+            self._raise(self._guarded(lambda: self.runner.apply(step)))
+
+        def _guarded(self, call: Callable[[], Any]) -> Any:
+            """Run our code; an exception in it is a tool failure, recorded, never raised
+            into Hypothesis (which would shrink our bug as if it were the target's)."""
+            try:
+                return call()
+            except Exception as exc:   # noqa: BLE001 - every exception here is ours
+                if shared.failure is None:
+                    shared.failure = ToolFailure.from_exception(exc, self.steps, self.seed)
+                return None
 
         def _raise(self, violation: Violation | None) -> None:
-            if violation is not None:
-                found = finding_type(violation.invariant)(violation, self.steps, self.seed)
-                if on_finding is not None:
-                    on_finding(found)
-                raise found
+            if violation is None:
+                return
+            steps = self.steps
+            if shared.side_channel and violation.invariant in DEATH_KINDS:
+                # the target's state carries over between examples: keep the last ones too
+                context = shared.previous_steps[-max(0, DEATH_CONTEXT_STEPS - len(steps)):]
+                steps = context + steps
+                if violation.step is not None:
+                    violation = Violation(violation.invariant, violation.detail, violation.step + len(context))
+            found = finding_type(violation.invariant)(violation, steps, self.seed)
+            if on_finding is not None:
+                on_finding(found)
+            if shared.side_channel:
+                shared.findings.append(found)
+                return
+            raise found
 
         @rule(step=fs.upload_op(n, min_items=knobs.min_items))
         def upload(self, step: dict[str, Any]) -> None:
@@ -132,18 +200,19 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
             self._do(step)
 
         if knobs.faults:
-            @rule(step=fs.faults_step())
+            @rule(step=fs.faults_step(max_burst=knobs.max_burst))
             def link_faults(self, step: dict[str, Any]) -> None:
                 self._do(step)
 
         @invariant()
         def vehicle_keeps_the_protocol_invariants(self) -> None:
             if self.runner is not None and self.steps and not _spent():
-                self._raise(self.runner.check())
+                self._raise(self._guarded(self.runner.check))
 
         def teardown(self) -> None:
             if self.runner is not None:
-                self.runner.close()
+                self._guarded(self.runner.close)
+                shared.previous_steps = list(self.steps)
             if on_example is not None and self.runner is not None:   # an empty one (past the budget) is none
                 on_example(len(self.steps))
 

@@ -9,6 +9,11 @@ Wall-time budget: Hypothesis has none, and an exception thrown out of a running 
 confuses its shrinker, so a budgeted search runs in chunks (each a complete Hypothesis run
 of a few examples, seeded from the campaign seed and the chunk number) and draws no new
 chunk once the budget is spent. A finding ends the search: its chunk has shrunk it.
+
+UDP targets: one connection (socket, discovered target, HEARTBEAT watch) serves the whole
+campaign, and findings reach the search through the `CampaignState`, not as exceptions
+(machine.py says why). A target that never says HEARTBEAT raises `TargetUnresponsive`; an
+exception of our own raises `ToolError` with the steps that led to it.
 """
 
 from __future__ import annotations
@@ -26,7 +31,9 @@ from reference_impl.errors import UsageError
 from reference_impl.net.sim import CaptureHook, stable_seed
 
 from ..case import Case, Violation
-from .machine import Finding, Knobs, machine_class
+from ..outcomes import ToolError
+from .connection import TargetConnection
+from .machine import CampaignOver, CampaignState, Finding, Knobs, machine_class
 from .steps import Runner
 
 MODE = "protocol"
@@ -39,19 +46,52 @@ _OPS = {"upload": ("type", "items"), "download": ("type",), "clear": ("type",),
         "stray": ("messages", "after"), "faults": (), "wait": ("seconds",)}
 
 
+UDP_MAX_WAIT = 2.0          # s: the longest wait step over real sockets (in-process: 20 s of virtual time)
+UDP_MAX_BURST = 3.0         # s: the longest link outage over real sockets (in-process: 30 s)
+
+
+def udp_knobs(target: str) -> Knobs:
+    """A campaign's knobs over real sockets, where time is real: waits and link outages
+    short enough that a step costs about what the protocol forces, not what a virtual
+    clock would skip for free."""
+    return Knobs(target=target, max_wait=UDP_MAX_WAIT, max_burst=UDP_MAX_BURST)
+
+
 MAX_STEP_WAIT = 600.0   # s of virtual time one step of a case may wait (a bound for edited files)
 
 
 def search(target: str, *, seed: int, max_examples: int | None = None,
            stop_after: float | None = None, database: ExampleDatabase | None = None,
            on_example: Callable[[int], None] | None = None,
-           knobs: Knobs | None = None) -> list[Case]:
-    """Run the protocol state machine against `target`; return the shrunk findings."""
-    _supported(target)
-    knobs = Knobs(target=target) if knobs is None else _with_target(knobs, target)
+           knobs: Knobs | None = None, profile: str | None = None,
+           capture: CaptureHook | None = None) -> list[Case]:
+    """Run the protocol state machine against `target`; return the shrunk findings.
+    `profile` (UDP targets) names the vehicle profile whose rules the oracles apply;
+    `capture` sees the live traffic of a UDP campaign (the campaign keeps the last of it)."""
+    if knobs is None:
+        knobs = Knobs(target=target) if parse_target(target).in_process else udp_knobs(target)
+    else:
+        knobs = _with_target(knobs, target)
+    if profile is not None:
+        from dataclasses import replace
+        knobs = replace(knobs, profile=profile)
     if max_examples is None and stop_after is None:
         max_examples = DEFAULT_EXAMPLES
     deadline = None if stop_after is None else time.monotonic() + stop_after
+    uri = parse_target(knobs.target)
+    state = CampaignState()
+    if not uri.in_process:   # TargetUnresponsive if it never says HEARTBEAT
+        state.connection = TargetConnection(uri, seed=seed, capture=capture)
+    try:
+        return _search(knobs, seed, max_examples, deadline, database, on_example, state)
+    finally:
+        if state.connection is not None:
+            state.connection.close()
+
+
+def _search(knobs: Knobs, seed: int, max_examples: int | None, deadline: float | None,
+            database: ExampleDatabase | None, on_example: Callable[[int], None] | None,
+            state: CampaignState) -> list[Case]:
     done = 0
     chunk = 0
     rate = 0.0   # examples per second so far, to size the next chunk
@@ -69,7 +109,10 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
                 on_example(units)
 
         t0 = time.monotonic()
-        found = _run_chunk(knobs, seed, chunk, size, database, example_done, deadline)
+        found = _run_chunk(knobs, seed, chunk, size, database, example_done, deadline, state)
+        if state.failure is not None:
+            raise ToolError(state.failure)
+        found = found or state.findings
         done += counted[0]
         rate = counted[0] / max(time.monotonic() - t0, 1e-6)
         if found:
@@ -80,10 +123,13 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
 def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | None:
     """Re-run the case's steps (in virtual time for in-process targets); the first broken
     invariant, or None."""
-    _supported(case.target)
     for i, step in enumerate(case.steps):
         _check_step(step, f"step {i}")
-    runner = Runner(case.target, case.seed, capture=capture, atomic=case.found_by.get("atomic"))
+    profile = case.found_by.get("profile")
+    if profile is not None and not isinstance(profile, str):
+        raise UsageError(f"found_by.profile: expected a profile name or file, got {profile!r:.40}")
+    runner = Runner(case.target, case.seed, capture=capture, atomic=case.found_by.get("atomic"),
+                    profile=profile)
     try:
         for step in case.steps:
             violation = runner.apply(step) or runner.check()
@@ -104,8 +150,9 @@ def _chunk_size(rate: float, time_left: float, left: int | None, first: int = FI
 
 
 def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: ExampleDatabase | None,
-               on_example: Callable[[int], None], stop_at: float | None = None) -> list[Finding]:
-    machine = machine_class(knobs, on_example=on_example, stop_at=stop_at)
+               on_example: Callable[[int], None], stop_at: float | None = None,
+               state: CampaignState | None = None) -> list[Finding]:
+    machine = machine_class(knobs, on_example=on_example, stop_at=stop_at, state=state)
     test = get_state_machine_test(machine, settings=settings(
         max_examples=size, stateful_step_count=knobs.steps, deadline=None, database=database,
         derandomize=False, suppress_health_check=list(HealthCheck), verbosity=Verbosity.quiet,
@@ -120,11 +167,26 @@ def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: Example
     try:
         test()
     except BaseException as exc:   # noqa: BLE001 - sorted below: findings, or re-raised
+        if _ended_by_us(exc):
+            return []              # what the campaign found is in its state
         findings, others = _split(exc)
         if others or not findings:
             raise
         return _smallest_per_invariant(findings)
     return []
+
+
+def _ended_by_us(exc: BaseException | None) -> bool:
+    """`CampaignOver`, or what Hypothesis made of it: ending a test case half-way can make
+    it report a `FlakyStrategyDefinition` (the same choices drew more before), with ours as
+    its context."""
+    for _ in range(8):
+        if exc is None:
+            return False
+        if isinstance(exc, CampaignOver):
+            return True
+        exc = exc.__context__
+    return False
 
 
 def _split(exc: BaseException) -> tuple[list[Finding], list[BaseException]]:
@@ -157,27 +219,14 @@ def _case(found: Finding, knobs: Knobs, seed: int, chunk: int, examples: int) ->
                                 "max_wait": knobs.max_wait}
     if knobs.atomic is not None:
         found_by["atomic"] = knobs.atomic
+    if knobs.profile is not None:
+        found_by["profile"] = knobs.profile
     return Case(MODE, knobs.target, found.seed, tuple(found.steps), found.violation, found_by)
 
 
 def _with_target(knobs: Knobs, target: str) -> Knobs:
     from dataclasses import replace
     return replace(knobs, target=target)
-
-
-def _supported(target: str) -> None:
-    """The plan oracles compare what is stored with what went over the wire, item for item.
-    A builtin profile that stores plans in another form (ArduPilot: home at seq 0, A1;
-    compact items, A13) would be judged against the wrong plan: refuse it, plainly."""
-    uri = parse_target(target)
-    if uri.kind != "builtin":
-        return
-    from reference_impl.profiles import load_profile
-    b = load_profile(uri.name).behaviour
-    if b.home_at_seq0 or b.item_storage != "exact":
-        raise UsageError(f"protocol fuzzing of {target} is not supported: its profile stores plans "
-                         "in another form than they are sent (home at seq 0, compact items), which the "
-                         "plan oracles do not model yet (--mode frames works)")
 
 
 def _check_step(step: Any, where: str) -> None:

@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from conformance.harness.stored_form import describe_differences
 from reference_impl.mission import messages as m
 from reference_impl.mission.constants import MissionResult
 from reference_impl.mission.items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
@@ -38,6 +39,7 @@ from reference_impl.wire.dialect import mavlink as _d
 from ..case import Violation
 from .faults import build_fault_model
 from .gcs import FuzzGcs
+from .connection import TargetConnection
 from .versions import Plan, Versions, Write, describe_plan
 from .world import World
 
@@ -51,12 +53,16 @@ INVARIANTS: dict[str, str] = {
     "idle": "After every step, the vehicle and every GCS return to idle within a bound derived "
             "from the protocol's timeouts.",
     "retry-limit": "Neither end resends one request more often than the retry limit.",
-    "still-answers": "After every step the vehicle still answers MISSION_REQUEST_LIST.",
-    "crash": "No node raises: an exception in the in-process vehicle (or our GCS) is a finding.",
+    "target-hang": "After every step the vehicle still answers MISSION_REQUEST_LIST (a HEARTBEAT "
+                   "alone is not an answer).",
+    "target-crash": "The vehicle never dies: an in-process vehicle never raises; a remote one keeps "
+                    "sending HEARTBEAT and answering.",
 }
+HEARTBEAT_SILENCE = 3.0   # s without a HEARTBEAT (a 1 Hz stream) that make a silent target a crashed one
 
 MAX_ROUNDS = 10_000   # bound on the wait loop of one step (each round advances time or ends)
-UDP_DRAIN = 0.3       # s after stray messages over a real network, for their replies to land
+UDP_DRAIN = 0.3       # s at most after stray messages over a real network, for their replies to land
+UDP_QUIET = 0.05      # s without an answer from the target that end that wait early
 
 
 @dataclass
@@ -91,11 +97,13 @@ class Runner:
     """Applies steps to a fresh `World` and checks the invariants after each."""
 
     def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
-                 atomic: bool | None = None) -> None:
-        self.world = w = World(target, seed, capture=capture, atomic=atomic)
+                 atomic: bool | None = None, connection: TargetConnection | None = None,
+                 profile: str | None = None) -> None:
+        self.world = w = World(target, seed, capture=capture, atomic=atomic, connection=connection,
+                               profile=profile)
         self.index = -1
         initial = {t: w.stored(t) for t in PLAN_TYPES}   # None over the wire: unknown
-        self.versions = Versions(initial, atomic=w.profile.atomic)
+        self.versions = Versions(initial, atomic=w.profile.atomic, form=w.profile.form)
         t = w.profile.timings
         self.idle_bound = (t.default_timeout * (t.max_retries + 1)       # a download left open
                            + t.item_timeout * (t.max_retries + 1)        # an upload left silent
@@ -109,8 +117,6 @@ class Runner:
         """Run one step; a violation seen while it ran (results, idleness) is returned."""
         self.index += 1
         w = self.world
-        if w.unresponsive is not None:
-            return self._violation("still-answers", w.unresponsive)
         kind = step.get("op")
         handler: Callable[[dict[str, Any]], _Group | Violation | None] = {
             "upload": self._operation, "download": self._operation, "clear": self._operation,
@@ -125,11 +131,10 @@ class Runner:
     def check(self) -> Violation | None:
         """The invariants that hold between steps."""
         w = self.world
-        if w.unresponsive is not None:
-            return self._violation("still-answers", w.unresponsive)
+        self._raise_tool_crash()
         crashed = w.crashes()
         if crashed:
-            return self._violation("crash", f"a node raised and fell silent: {crashed[0]}")
+            return self._violation("target-crash", f"the vehicle raised and fell silent: {crashed[0]}")
         if w.vehicle is not None:
             for t in PLAN_TYPES:
                 stored = w.stored(t)
@@ -232,9 +237,10 @@ class Runner:
             now = w.now()
             limit, late = min(((r.started + self._bound(r), r) for r in pending), key=lambda p: p[0])
             if now >= limit:
+                self._raise_tool_crash()
                 crashed = w.crashes()
                 if crashed:
-                    return self._violation("crash", f"a node raised and fell silent: {crashed[0]}")
+                    return self._violation("target-crash", f"the vehicle raised and fell silent: {crashed[0]}")
                 return self._violation("one-result", (
                     f"{describe_op(late.op)} by GCS {late.name} had no result {limit - late.started:g} s "
                     f"after it started (the bound from the protocol's timeouts and retry limit)"))
@@ -258,12 +264,14 @@ class Runner:
             if run.op["op"] == "download" and result.ok:
                 reads.append((MissionType(run.op["type"]), tuple(result.items or ())))
         touched = {t for wr in writes for t in wr.types}
+        same = self.versions.form.same
         for t, plan in reads:
             candidates = [p for wr in writes if t in wr.types for p in wr.plans]
-            if not (self.versions.allows(t, plan) or plan in candidates):
+            if not (self.versions.allows(t, plan) or any(same(plan, p) for p in candidates)):
                 return self._violation("download-matches-upload", (
                     f"a download of the {t.label} plan returned {describe_plan(plan)}, which is none "
-                    f"of the versions the vehicle accepted ({self.versions.describe(t)})"))
+                    f"of the versions the vehicle accepted ({self.versions.describe(t)})"
+                    + self._closest(t, plan, candidates)))
         self.versions.apply(writes)
         for t, plan in reads:
             if t not in touched:
@@ -278,6 +286,21 @@ class Runner:
                     f"{describe_op(run.op)} by GCS {run.name} ended with {extra} results"))
         return None
 
+    def _closest(self, t: MissionType, plan: Plan, sent: list[Plan]) -> str:
+        """How the downloaded plan differs from the nearest version of the same length, in
+        the target's stored form: a reader must see the field, not only two digests."""
+        form = self.versions.form
+        held = [(p, True) for p in (self.versions.possible[t] or ())] + [(p, False) for p in sent]
+        best: list[str] | None = None
+        for p, stored in held:
+            if len(p) == len(plan):
+                diffs = form.differences(plan, p, want_stored=stored)
+                if best is None or len(diffs) < len(best):
+                    best = diffs
+        if not best:
+            return ""
+        return f"; nearest: {describe_differences(best)} (compared as: {form.describe()})"
+
     def _op_writes(self, run: _Run) -> list[Write]:
         op, result = run.op, run.result
         assert result is not None
@@ -287,7 +310,10 @@ class Runner:
             plans = run.plans
             asked_float = any(msg._type == m.REQUEST_FLOAT for msg in run.gcs.heard)
             if op.get("float") or asked_float:
-                variant = float_variant(plans[0])
+                # the items went out as MISSION_ITEM, "fx"/"fy" overrides and all (with
+                # out-of-range x/y no float plan is possible: only a refusal is right)
+                _, rewrite = wire_to_items(op["items"], MissionType(op["type"]))
+                variant = float_variant(plans[0], rewrite)
                 if variant is not None and variant != plans[0]:
                     plans = plans + (variant,)
             return [Write((MissionType(op["type"]),), plans, confirmed, maybe)]
@@ -303,7 +329,8 @@ class Runner:
         w = self.world
         gcss = (w.a, w.b)
         if group.strays and not w.virtual:
-            w.run_for(UDP_DRAIN)   # replies to stray messages: let them arrive now
+            since = w.now()        # replies to stray messages: let them arrive now
+            w.run_until(lambda: w.connection.replies_quiet(since, UDP_QUIET), UDP_DRAIN)
         if w.run_until(lambda: w.vehicle_idle() and not any(g.busy for g in gcss) and w.quiet(),
                        self.idle_bound):
             return None
@@ -372,16 +399,58 @@ class Runner:
                 probe.listen()
                 probe.send_raw(m.request_list_message(MissionType.MISSION, target))
                 if w.run_until(answered, t.default_timeout):
-                    if probe.counts.get(int(MissionType.MISSION), 0) > 0:
-                        probe.send_raw(m.ack_message(MissionResult.OPERATION_CANCELLED, MissionType.MISSION,
-                                                     target))
-                        w.run_until(_always, 0.0)
-                    return None
+                    return self._counted(MissionType.MISSION) or (
+                        None if w.virtual else self._other_counts())
+                age = w.heartbeat_age()
+                if age is not None and age > HEARTBEAT_SILENCE:
+                    break          # silent altogether: no use asking again
+        self._raise_tool_crash()
+        asked = f"MISSION_REQUEST_LIST (asked every {t.default_timeout:g} s)"
         crashed = w.crashes()
-        why = f" (it raised: {crashed[0]})" if crashed else ""
-        return self._violation("still-answers", (
-            f"the vehicle did not answer MISSION_REQUEST_LIST ({tries} tries, "
-            f"{t.default_timeout:g} s each){why}"))
+        if crashed:
+            return self._violation("target-crash", f"the vehicle raised and fell silent: {crashed[0]}")
+        age = w.heartbeat_age()
+        if age is not None and age > HEARTBEAT_SILENCE:
+            return self._violation("target-crash", (
+                f"the target fell silent: no HEARTBEAT for {_seconds(age)} and no answer to {asked}"))
+        beating = "" if age is None else " although its HEARTBEAT still comes"
+        return self._violation("target-hang", f"the vehicle did not answer {asked}{beating}")
+
+    def _counted(self, t: MissionType) -> Violation | None:
+        """Judge the MISSION_COUNT the probe heard for `t` (if any) against the lengths of
+        the plans the vehicle may hold, and close the download it opened."""
+        w, probe = self.world, self.world.probe
+        count = probe.counts.get(int(t))
+        if count is not None and not self.versions.allows_count(t, count):
+            return self._violation("download-matches-upload", (
+                f"the vehicle reports {count} {t.label} items (MISSION_COUNT to a MISSION_REQUEST_LIST), "
+                f"but every version it may hold has another length ({self.versions.describe(t)})"))
+        if count:
+            probe.send_raw(m.ack_message(MissionResult.OPERATION_CANCELLED, t, w.target))
+            w.run_until(_always, 0.0)
+        return None
+
+    def _other_counts(self) -> Violation | None:
+        """Over the wire the store cannot be read: the fence and rally counts are asked
+        too (one try each, a few milliseconds), so a plan of the wrong length is seen after
+        the step that made it, not only when a download happens to follow."""
+        w, probe = self.world, self.world.probe
+        me = probe.system
+        for t in (MissionType.FENCE, MissionType.RALLY):
+            probe.listen()
+            probe.send_raw(m.request_list_message(t, w.target))
+            if w.run_until(lambda: any(msg._type in ("MISSION_COUNT", "MISSION_ACK") and msg.target_system == me
+                                       for msg in probe.heard), w.profile.timings.default_timeout):
+                v = self._counted(t)
+                if v is not None:
+                    return v
+        return None
+
+    def _raise_tool_crash(self) -> None:
+        """One of our own GCS nodes raised: that is our bug, never the target's."""
+        exc = self.world.tool_crash()
+        if exc is not None:
+            raise exc
 
     def _violation(self, invariant: str, detail: str) -> Violation:
         return Violation(invariant, detail, self.index if self.index >= 0 else None)
@@ -394,27 +463,41 @@ WIRE_FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", 
 
 
 def wire_to_items(wire: list[dict[str, Any]], t: MissionType
-                  ) -> tuple[list[MissionItem], dict[int, dict[str, int]]]:
+                  ) -> tuple[list[MissionItem], dict[int, dict[str, int | float]]]:
     """Wire items -> the `MissionItem`s the client uploads, and the fields to rewrite on the
-    way out (a "seq" or "mission_type" that differs from the transfer's)."""
+    way out: a "seq" or "mission_type" that differs from the transfer's (on either item
+    message), and "fx"/"fy", floats that go out in MISSION_ITEM.x/y instead of the item's
+    int x/y converted (MISSION_ITEM_INT keeps the int x/y; `fuzz.protocol.gcs.outgoing`)."""
     items, rewrite = [], {}
     for seq, d in enumerate(wire):
         items.append(MissionItem(seq, int(d["frame"]), int(d["command"]), float(d["param1"]),
                                  float(d["param2"]), float(d["param3"]), float(d["param4"]),
                                  int(d["x"]), int(d["y"]), float(d["z"]), int(d["current"]),
                                  int(d["autocontinue"]), t))
-        over = {k: int(d[k]) for k in ("seq", "mission_type") if k in d}
+        over: dict[str, int | float] = {k: int(d[k]) for k in ("seq", "mission_type") if k in d}
+        over.update((k, float(d[k])) for k in ("fx", "fy") if k in d)
         if over:
             rewrite[seq] = over
     return items, rewrite
 
 
-def float_variant(plan: Plan) -> Plan | None:
-    """The plan as a vehicle stores it when the items came as MISSION_ITEM (float x/y);
-    None if some item's x/y cannot survive that trip."""
+def float_variant(plan: Plan, rewrite: dict[int, dict[str, Any]] | None = None) -> Plan | None:
+    """The plan as a vehicle stores it when the items came as MISSION_ITEM (float x/y):
+    each item's x/y as it went out (its int x/y converted, or the "fx"/"fy" override in
+    `rewrite[seq]`), rounded to float32 by the wire and converted back the vehicle's way
+    (`MissionItem.int_xy_from_float`, the spec vehicle's own). None if some item's x/y
+    cannot be an int32 there (NaN, +-inf, 1e10, 215 deg): a vehicle must refuse that item
+    (MAV_MISSION_INVALID_PARAM5_X / _PARAM6_Y), and one that accepts it stores a plan
+    nobody can know, which then matches no candidate and is a finding."""
+    from reference_impl.mission.items import to_float32
     out = []
     for it in plan:
-        x, y = MissionItem.int_xy_from_float(it.frame, *it.float_xy())
+        fx, fy = it.float_xy()
+        over = rewrite.get(it.seq) if rewrite else None
+        if over:
+            fx = to_float32(over["fx"]) if "fx" in over else fx
+            fy = to_float32(over["fy"]) if "fy" in over else fy
+        x, y = MissionItem.int_xy_from_float(it.frame, fx, fy)
         if x is None or y is None:
             return None
         out.append(MissionItem(it.seq, it.frame, it.command, it.param1, it.param2, it.param3,
@@ -446,3 +529,7 @@ def _type_label(value: Any) -> str:
 
 def _always() -> bool:
     return True
+
+
+def _seconds(value: float) -> str:
+    return "the whole example" if value == float("inf") else f"{value:.1f} s"

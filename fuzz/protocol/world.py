@@ -25,61 +25,94 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
+from conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, profile_for_autopilot
 from conformance.session import build_vehicle
 from conformance.target_uri import TargetUri, parse_target
 from reference_impl.mission.items import MissionType
 from reference_impl.mission.timing import Timings
-from reference_impl.net import FaultModel, SimNetwork, UdpDriver
+from reference_impl.net import FaultModel, SimNetwork
 from reference_impl.net.guard import GuardedNode
-from reference_impl.net.shared_link import SharedLink
 from reference_impl.net.sim import CaptureHook
-from reference_impl.net.uri import local_bind_for
 from reference_impl.vehicle import VehicleNode
 
+from .connection import TargetConnection
 from .faults import install
 from .gcs import FuzzGcs
 
 SYSTEM_A, SYSTEM_B, SYSTEM_PROBE, SYSTEM_MUTE, COMPONENT = 245, 246, 247, 248, 190
-DISCOVERY_TIMEOUT = 5.0   # s for the target's first HEARTBEAT (real time, UDP targets)
-NON_ATOMIC_PROFILES = frozenset({"ardupilot"})   # VARIANTS A2: items written as they arrive
+OUR_NODES = ("a", "b", "probe", "mute")   # an exception in one of these is our bug
+# Over real sockets every dropped message costs our GCS a real timeout: a fuzz GCS need not
+# wait the spec's 1.5 s for a reply that comes within milliseconds on loopback, and a quick
+# resend (a duplicate the vehicle must take in its stride) is fuzzing in itself.
+UDP_GCS_TIMINGS = Timings(default_timeout=0.5)
 
 
 @dataclass(frozen=True)
 class Profile:
-    """What the oracles hold the target to."""
+    """What the oracles hold the target to, and where that came from."""
 
     atomic: bool = True               # an upload replaces the plan whole or not at all
     timings: Timings = Timings()      # the retry limit the vehicle must keep
     retry_cap: bool = True            # False: retries end on a protocol timeout (PX4, P3)
+    form: StoredForm = SPEC_FORM      # how it stores plans (home in slot 0, compact items)
+    basis: str = "the spec"
+
+    def describe(self) -> str:
+        rules = [self.form.describe().split(" (")[0]]
+        if not self.atomic:
+            rules.append("non-atomic upload")
+        if not self.retry_cap:
+            rules.append("retries until a protocol timeout")
+        return f"{self.basis}: " + ", ".join(rules)
 
 
-def profile_for(uri: TargetUri, vehicle: VehicleNode | None) -> Profile:
-    """Builtin profiles are held to their own documented timings and atomicity; mutants
-    and remote targets to the spec's (a mutant claims to be the spec vehicle)."""
-    if uri.kind == "builtin" and vehicle is not None:
-        behaviour = vehicle.server.behaviour
-        return Profile(atomic=uri.name not in NON_ATOMIC_PROFILES, timings=behaviour.timings,
-                       retry_cap=behaviour.retry_cap)
+def profile_from(name_or_file: str, basis: str) -> Profile:
+    """The oracle rules of a vehicle profile (builtin name or TOML file)."""
+    from reference_impl.profiles import load_profile
+    b = load_profile(name_or_file).behaviour
+    return Profile(atomic=b.atomic_upload, timings=b.timings, retry_cap=b.retry_cap,
+                   form=form_of_behaviour(b, basis), basis=basis)
+
+
+def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | None = None,
+                autopilot: int | None = None) -> Profile:
+    """In-process targets are held to their own profile's rules (a mutant claims to be the
+    spec vehicle); a UDP target to the profile given with --profile, else to the builtin
+    profile of the autopilot family its HEARTBEAT names, else to the spec."""
+    if uri.kind == "mutant":
+        return Profile()
+    if vehicle is not None:
+        b = vehicle.server.behaviour
+        return Profile(atomic=b.atomic_upload, timings=b.timings, retry_cap=b.retry_cap,
+                       form=form_of_behaviour(b, f"the {uri} profile"), basis=f"the {uri} profile")
+    if chosen is not None:
+        return profile_from(chosen, f"profile {chosen} (--profile)")
+    name = profile_for_autopilot(autopilot)
+    if name is not None:
+        return profile_from(name, f"the {name} profile (HEARTBEAT autopilot {autopilot})")
     return Profile()
 
 
 class World:
     def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
-                 atomic: bool | None = None) -> None:
+                 atomic: bool | None = None, connection: TargetConnection | None = None,
+                 profile: str | None = None) -> None:
         self.uri = parse_target(target)
         self.seed = seed
         self.virtual = self.uri.in_process
         self.vehicle: VehicleNode | None = None
         self.guards: dict[str, GuardedNode] = {}
-        self.unresponsive: str | None = None   # set when a remote target never said HEARTBEAT
         self.shared = False                    # all GCSs on one socket (UDP targets)
-        self._up, self._down = FaultModel(), FaultModel()   # A's link; changed in place
+        self.connection: TargetConnection | None = None
+        self._owns_connection = False
         if self.virtual:
+            self._up, self._down = FaultModel(), FaultModel()   # A's link; changed in place
             self._open_sim(capture)
         else:
-            self._open_udp(capture)
-        profile = profile_for(self.uri, self.vehicle)
-        self.profile = profile if atomic is None else dataclasses.replace(profile, atomic=atomic)
+            self._open_udp(capture, connection, seed)
+        autopilot = self.connection.autopilot if self.connection is not None else None
+        base = profile_for(self.uri, self.vehicle, chosen=profile, autopilot=autopilot)
+        self.profile = base if atomic is None else dataclasses.replace(base, atomic=atomic)
 
     # --- time and running -----------------------------------------------------------------
     def now(self) -> float:
@@ -122,15 +155,30 @@ class World:
         return not self.virtual or self.driver.in_flight() == 0
 
     def crashes(self) -> list[str]:
-        return [f"{name}: {g.crash}" for name, g in self.guards.items() if g.crash is not None]
+        """Exceptions the target raised (an in-process vehicle): a finding."""
+        return [f"{name}: {g.crash}" for name, g in self.guards.items()
+                if g.crash is not None and name not in OUR_NODES]
+
+    def tool_crash(self) -> BaseException | None:
+        """An exception one of our own GCS nodes raised: a bug of ours, not the target's."""
+        for name in OUR_NODES:
+            g = self.guards.get(name)
+            if g is not None and g.crash is not None:
+                return g.exception or RuntimeError(f"GCS {name}: {g.crash}")
+        return None
+
+    def heartbeat_age(self) -> float | None:
+        """Seconds since the target's last HEARTBEAT (UDP targets; None in-process)."""
+        return None if self.connection is None else self.connection.heartbeat_age()
 
     def close(self) -> None:
-        if not self.virtual:
-            self.driver.close()
+        if self.connection is not None and self._owns_connection:
+            self.connection.close()
 
     # --- wiring ---------------------------------------------------------------------------
     def _gcs(self, system: int, target: Any, *, heartbeat: bool, mute: bool = False) -> FuzzGcs:
         return FuzzGcs(system, COMPONENT, target, heartbeat=heartbeat, mute=mute,
+                       timings=None if self.virtual else UDP_GCS_TIMINGS,
                        wall_clock=self.driver.clock.wall)
 
     @property
@@ -160,37 +208,25 @@ class World:
         if capture is not None:
             net.add_capture(capture)
 
-    def _open_udp(self, capture: CaptureHook | None) -> None:
-        driver = self.driver = UdpDriver(seed=self.seed)
-        try:
-            udp = self.uri.udp
-            bind_host = local_bind_for(udp.host)
-            self.a = self._gcs(SYSTEM_A, None, heartbeat=True)
-            self.b = self._gcs(SYSTEM_B, None, heartbeat=True)
-            self.probe = self._gcs(SYSTEM_PROBE, None, heartbeat=True)
-            self.mute = self._gcs(SYSTEM_MUTE, None, heartbeat=True, mute=True)
-            if capture is not None:
-                driver.add_capture(capture)
-            link = SharedLink(self._guarded("a", self.a))
-            self.shared = True
-            bind = (bind_host, 0) if self.uri.kind == "udp" else udp.address   # udpin: it sends first
-            driver.add_node(link, bind=bind, outgoing=self._up, incoming=self._down)
-            if self.uri.kind == "udp":
-                self.a.endpoint.add_address(udp.address)
-            if not driver.run_until(lambda: self.a.target is not None, timeout=DISCOVERY_TIMEOUT):
-                self.unresponsive = (f"no HEARTBEAT from {self.uri} within {DISCOVERY_TIMEOUT:g} s "
-                                     "(is it running, and is the address right?)")
-                self.target = None
-                return
-            self.target = self.a.target
-            address = self.a.endpoint.peers.get(self.target, udp.address)
-            for name, gcs in (("b", self.b), ("probe", self.probe), ("mute", self.mute)):
-                gcs.set_target(self.target)
-                link.join(self._guarded(name, gcs))
-                gcs.endpoint.add_address(address)
-        except BaseException:
-            driver.close()
-            raise
+    def _open_udp(self, capture: CaptureHook | None, connection: TargetConnection | None,
+                  seed: int) -> None:
+        """GCS nodes on the campaign's connection (or on one of our own, for a replay)."""
+        if connection is None:   # TargetUnresponsive if it never says HEARTBEAT
+            connection = TargetConnection(self.uri, seed=seed, capture=capture)
+            self._owns_connection = True
+        self.connection = connection
+        self.driver = connection.driver
+        self._up, self._down = connection.up, connection.down
+        self.shared = True
+        self.target = connection.target
+        self.a = self._gcs(SYSTEM_A, self.target, heartbeat=True)
+        self.b = self._gcs(SYSTEM_B, self.target, heartbeat=False)
+        self.probe = self._gcs(SYSTEM_PROBE, self.target, heartbeat=False)
+        self.mute = self._gcs(SYSTEM_MUTE, self.target, heartbeat=False, mute=True)
+        for gcs in (self.a, self.b, self.probe, self.mute):
+            gcs.endpoint.add_address(connection.address)
+        connection.attach([self._guarded(name, gcs) for name, gcs in
+                           (("a", self.a), ("b", self.b), ("probe", self.probe), ("mute", self.mute))])
 
     def _guard(self, add: Callable[..., Any], name: str, node: Any) -> None:
         guard = self.guards[name] = GuardedNode(node)

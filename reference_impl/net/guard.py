@@ -16,8 +16,10 @@ class GuardedNode:
     def __init__(self, node: DatagramNode) -> None:
         self.node = node
         self.crash: str | None = None    # "TypeError: ... (file.py:123)" once it has raised
+        self.exception: BaseException | None = None   # the exception itself, traceback included
 
     def _died(self, exc: BaseException) -> None:
+        self.exception = exc
         where = traceback.extract_tb(exc.__traceback__)[-1]
         self.crash = f"{type(exc).__name__}: {exc} ({where.filename}:{where.lineno})"
 

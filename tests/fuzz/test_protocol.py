@@ -144,7 +144,7 @@ def test_a_vehicle_that_raises_is_a_crash_finding(monkeypatch):
     monkeypatch.setattr(MissionServer, "_on_clear_all", boom)
     case = Case("protocol", "builtin:spec", 0, ({"op": "clear", "type": 1}, {"op": "download", "type": 0}))
     v = replay(case)
-    assert v is not None and v.invariant == "crash" and "ZeroDivisionError: planted" in v.detail
+    assert v is not None and v.invariant == "target-crash" and "ZeroDivisionError: planted" in v.detail
 
 
 def test_a_vehicle_that_never_gives_up_is_not_idle():

@@ -11,12 +11,16 @@ import math
 
 from hypothesis import HealthCheck, Phase, find, given, settings
 from hypothesis import strategies as st
+from hypothesis.errors import NoSuchExample
 
 from fuzz import strategies as fs
 from fuzz.protocol.faults import CutAfter, build_fault_model
+from fuzz.protocol.gcs import outgoing
 from fuzz.protocol.steps import wire_to_items
 from reference_impl.mission import messages as m
-from reference_impl.mission.items import INT32_MAX, INT32_MIN, MissionType
+from reference_impl.mission.items import (
+    GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, MissionType, to_float32,
+)
 from reference_impl.mission.validation import first_defect
 from reference_impl.wire.codec import FrameDecoder, FrameEncoder
 from reference_impl.wire.dialect import mavlink as _d
@@ -80,9 +84,7 @@ def test_everything_drawn_fits_its_wire_fields(plan, raw):
     items, rewrite = wire_to_items(plan, T.MISSION)
     for it in items:
         for as_int in (True, False):
-            msg = m.item_message(it, (1, 1), as_int=as_int)
-            for name, value in rewrite.get(it.seq, {}).items():
-                setattr(msg, name, value)
+            msg = outgoing(m.item_message(it, (1, 1), as_int=as_int), rewrite.get(it.seq, {}))
             (frame,) = dec.feed(enc.encode(msg))
             assert frame.msg.seq == rewrite.get(it.seq, {}).get("seq", it.seq)
     cls = getattr(_d, f"MAVLink_{raw['msg'].lower()}_message")
@@ -125,3 +127,129 @@ def test_operation_sequences_cover_every_step_kind():
     for kind in kinds:
         found = _find(fs.operation_sequences(5, 4), lambda p, k=kind: any(s["op"] == k for s in p))
         assert any(s["op"] == kind for s in found)
+
+
+# --- out-of-range floats in every float field of MISSION_ITEM ------------------------------
+
+# Counting over many draws needs a fixed seed to be repeatable: derandomized, generate only.
+COVER = settings(FIND, derandomize=True)
+OUT_OF_RANGE = {math.nan if v != v else v for v in fs.OUT_OF_RANGE_F32}
+FLOAT_KEYS = ("param1", "param2", "param3", "param4", "z", "fx", "fy")   # fx/fy: MISSION_ITEM.x/y
+
+
+def _key(value: float) -> float | str:
+    return "nan" if value != value else value
+
+
+OUT_KEYS = {_key(v) for v in OUT_OF_RANGE}
+
+
+def _cover(strategy, seen_in, wanted: set, max_examples: int) -> None:
+    """Draw (with a fixed seed) until every pair in `wanted` was seen; fail naming the rest.
+    Five examples a draw: Hypothesis's own cost per draw is most of the time."""
+    seen: set = set()
+
+    def complete(examples) -> bool:
+        for example in examples:
+            seen.update(seen_in(example) & wanted)
+        return seen >= wanted
+
+    try:
+        find(st.lists(strategy, min_size=5, max_size=5), complete,
+             settings=settings(COVER, max_examples=max_examples // 5))
+    except NoSuchExample:
+        pass
+    assert not wanted - seen, f"never drawn in {max_examples} examples: {sorted(map(str, wanted - seen))}"
+
+
+def _kind(d: dict) -> str:
+    return "global" if d["frame"] in GLOBAL_FRAMES else "local" if d["frame"] in LOCAL_FRAMES else "no-location"
+
+
+def test_out_of_range_floats_are_float32_exact_and_out_of_int32_range():
+    """Each survives the wire unchanged, and none is an int32 as degE7."""
+    assert len(fs.OUT_OF_RANGE) == len(OUT_OF_RANGE) >= 15
+    for value, why in fs.OUT_OF_RANGE:
+        assert why
+        assert value != value or to_float32(value) == value, value
+        assert value != value or not math.isfinite(value) or not INT32_MIN <= value * 1e7 <= INT32_MAX
+    for named in (1e10, -1e10, math.inf, -math.inf, 215.0, -215.0, 2.0**31, 3e9, fs.FLT_MAX):
+        assert named in fs.OUT_OF_RANGE_F32
+    assert "nan" in OUT_KEYS
+    # and the edge floats of every float field draw them
+    assert _find(fs.edge_f32, lambda v: v == 1e10) == 1e10
+    assert _find(fs.edge_f32, lambda v: v == 2.0**31) == 2.0**31
+
+
+def test_float_transfer_items_carry_every_out_of_range_value_in_every_float_field():
+    """Every value in every float field, and the issue's values (1e10, +-inf, NaN, 215 deg)
+    in x and y of items with a global or local location and without one. (Counted on
+    `float_overrides`, which `float_wire_item` applies as drawn: a whole item costs ten
+    times more to draw.)"""
+    overrides = {kind: fs.float_overrides(kind) for kind in fs.XY_KINDS}
+
+    @st.composite
+    def by_kind(draw):
+        kind = draw(st.sampled_from(fs.XY_KINDS))
+        return kind, draw(overrides[kind])
+
+    wanted = {(f, v) for f in FLOAT_KEYS for v in OUT_KEYS}
+    wanted |= {(kind, f, _key(v)) for kind in fs.XY_KINDS for f in ("fx", "fy")
+               for v in (1e10, -1e10, math.nan, math.inf, -math.inf, 215.0, -215.0)}
+    _cover(by_kind(), lambda kd: {(f, _key(v)) for f, v in kd[1].items()}
+           | {(kd[0], f, _key(v)) for f, v in kd[1].items()}, wanted, 40_000)
+    # ... and the items carry them: each kind of item, in x and in y, in every plan type
+    wanted = {(kind, f) for kind in fs.XY_KINDS for f in ("fx", "fy")}
+    for t in (T.MISSION, T.FENCE, T.RALLY):
+        _cover(fs.float_wire_item(t), lambda d: {(_kind(d), f) for f in ("fx", "fy")
+                                                  if f in d and _key(d[f]) in OUT_KEYS}, wanted, 5_000)
+    assert _key(_find(fs.float_wire_item(T.MISSION), lambda d: _key(d["z"]) in OUT_KEYS)["z"]) in OUT_KEYS
+
+
+def test_float_overrides_are_exact_in_range_values_or_edges_and_fit_the_wire():
+    """In-range overrides convert exactly (rounding and truncation agree), so the oracle's
+    float plan is the only one a correct vehicle can store."""
+    scale = {"global": 1e7, "local": 1e4, "no-location": 1.0}
+    for kind in fs.XY_KINDS:
+        for axis in ("x", "y"):
+            for v in _find(st.lists(fs.exact_xy(kind, axis), min_size=50), lambda vs: len(set(vs)) > 40):
+                assert to_float32(v) == v and v * scale[kind] == round(v * scale[kind]) == math.trunc(v * scale[kind])
+                assert INT32_MIN <= v * scale[kind] <= INT32_MAX
+            assert _find(fs.float_xy(kind, axis), lambda v: v in fs.PAST_RANGE_XY)
+            try:   # no override that fits an int32 converts differently rounded and truncated
+                bad = find(fs.float_xy(kind, axis), lambda v, k=scale[kind]: math.isfinite(v)
+                           and INT32_MIN <= v * k <= INT32_MAX and round(v * k) != math.trunc(v * k),
+                           settings=settings(FIND, max_examples=300))
+                raise AssertionError(f"{kind} {axis}: {bad!r} converts to two integers")
+            except NoSuchExample:
+                pass
+    item = _find(fs.float_wire_item(T.MISSION), lambda d: d.get("fx") == 1e10 and "fy" in d)
+    (it,), rewrite = wire_to_items([item], T.MISSION)
+    assert rewrite[0]["fx"] == 1e10
+    enc, dec = FrameEncoder(245, 190), FrameDecoder()
+    (frame,) = dec.feed(enc.encode(outgoing(m.item_message(it, (1, 1), as_int=False), rewrite[0])))
+    assert frame.msg.x == 1e10 and _key(frame.msg.y) == _key(to_float32(item["fy"]))
+    (frame,) = dec.feed(enc.encode(outgoing(m.item_message(it, (1, 1), as_int=True), rewrite[0])))
+    assert (frame.msg.x, frame.msg.y) == (item["x"], item["y"])   # MISSION_ITEM_INT keeps its ints
+
+
+def test_float_uploads_sometimes_carry_out_of_range_overrides_and_shrink_them_away():
+    def overridden(op):
+        return op.get("float") and any(_key(d[f]) in OUT_KEYS for d in op["items"] for f in ("fx", "fy") if f in d)
+    found = _find(fs.upload_op(5), overridden)
+    assert found["float"] and len(found["items"]) <= 5
+    # a failing float upload that needs none of them shrinks to one without any
+    small = find(fs.upload_op(5), lambda op: bool(op.get("float") and op["items"]),
+                 settings=settings(FIND, phases=[Phase.generate, Phase.shrink]))
+    assert not any("fx" in d or "fy" in d for d in small["items"])
+    # valid-plan uploads (edges=False) never carry them
+    valid = _find(fs.upload_op(5, edges=False), lambda op: op.get("float") and len(op["items"]) == 5)
+    assert not any("fx" in d or "fy" in d for d in valid["items"])
+
+
+def test_stray_float_items_carry_every_out_of_range_value_in_every_float_field():
+    wanted = {(f, v) for f in fs.FLOAT_FIELDS for v in OUT_KEYS}
+    _cover(fs.float_item_fields(), lambda d: {(f, _key(v)) for f, v in d.items()}, wanted, 20_000)
+    raw = fs.raw_message()
+    assert _find(raw, lambda r: r["msg"] == "MISSION_ITEM" and r["fields"]["x"] == 1e10)
+    assert _find(raw, lambda r: r["msg"] == "MISSION_ITEM" and _key(r["fields"]["param3"]) == "nan")

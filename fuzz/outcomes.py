@@ -1,0 +1,43 @@
+"""What a campaign can end with besides "no finding" and a finding about the target.
+
+- `TargetUnresponsive`: the target never said HEARTBEAT, so nothing was fuzzed. Not a
+  finding (nothing was sent that could have broken it); the CLI says so and exits 1.
+- `ToolFailure`: an exception inside mavconform while it ran an example. A bug of ours,
+  never a finding about the target: it is reported apart (exit 3), with the steps that
+  led to it saved as a case so it can be replayed and fixed.
+- `DEATH_KINDS`: the findings that mean the target stopped answering altogether.
+"""
+
+from __future__ import annotations
+
+import traceback
+from dataclasses import dataclass
+from typing import Any
+
+DEATH_KINDS = ("target-crash", "target-hang")
+
+
+class TargetUnresponsive(Exception):
+    """No HEARTBEAT from the target when the campaign began; `str()` says where."""
+
+
+@dataclass(frozen=True)
+class ToolFailure:
+    error: str                          # "TypeError: ..." (one line)
+    trace: str                          # the formatted traceback
+    steps: tuple[dict[str, Any], ...]   # what the example had run, the failing step last
+    seed: int                           # the example's seed (protocol) or the campaign's
+
+    @classmethod
+    def from_exception(cls, exc: BaseException, steps: list[dict[str, Any]], seed: int) -> "ToolFailure":
+        first = str(exc).splitlines()[0] if str(exc) else ""
+        return cls(f"{type(exc).__name__}: {first}".rstrip(": "),
+                   "".join(traceback.format_exception(exc)), tuple(steps), seed)
+
+
+class ToolError(Exception):
+    """Raised out of `search` when an example hit a `ToolFailure`."""
+
+    def __init__(self, failure: ToolFailure) -> None:
+        super().__init__(failure.error)
+        self.failure = failure
