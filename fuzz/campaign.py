@@ -44,6 +44,8 @@ RING_SECONDS = 120.0         # s of live traffic a UDP campaign keeps for a dyin
 RING_RECORDS = 100_000       # ... and at most this many datagram events
 RESTART_TIMEOUT = 120.0      # s a --restart-cmd may run
 RESTART_ATTEMPTS = 12        # restarts minimising one crash case may spend
+RESTART_SETTLE = 8.0         # s after a restarted target's first HEARTBEAT before a replay: a
+                             # SITL just booted refuses uploads for a few seconds (ArduCopter did)
 # What a hand-edited case can make a mode's replay raise (bad types or values in its steps).
 MALFORMED = (ValueError, TypeError, KeyError, AttributeError, IndexError, OverflowError, struct.error)
 MAV_AUTOPILOT_INVALID = 8    # what a GCS puts in its HEARTBEAT
@@ -275,9 +277,10 @@ class Restarter:
     """Runs the user's restart command (a shell command line, bounded) and waits for the
     target's HEARTBEAT, so a crash case can be replayed and minimised."""
 
-    def __init__(self, command: str, timeout: float = RESTART_TIMEOUT) -> None:
+    def __init__(self, command: str, timeout: float = RESTART_TIMEOUT, settle: float = RESTART_SETTLE) -> None:
         self.command = command
         self.timeout = timeout
+        self.settle = settle
         self.runs = 0
 
     def restart(self, target: str) -> str | None:
@@ -298,9 +301,13 @@ class Restarter:
             last = (done.stderr or "").strip().splitlines()[-1:] or [""]
             return f"--restart-cmd exited {done.returncode}" + (f": {last[0][:160]}" if last[0] else "")
         try:
-            TargetConnection(parse_target(target), discovery_timeout=self.timeout).close()
+            connection = TargetConnection(parse_target(target), discovery_timeout=self.timeout)
         except TargetUnresponsive as exc:
             return f"after --restart-cmd: {exc}"
+        try:
+            connection.driver.run_for(self.settle)
+        finally:
+            connection.close()
         return None
 
 

@@ -47,3 +47,22 @@ class _DiesOnUnknownAckResult(MissionServer):
 
 mutant("dies-on-unknown-ack-result", "dies on a MISSION_ACK whose result code MAV_MISSION_RESULT does not "
        "define (a planted crash for the fuzzers: no clause sends one)", set(), server_mutant(_DiesOnUnknownAckResult))
+
+
+class _DiesOnOutOfRangeParam(MissionServer):
+    """Converts param1 of a received item to a 16-bit integer as ArduPilot does
+    (AP_Mission.cpp `mavlink_int_to_mission_cmd`: `cmd.p1 = packet.param1`, p1 a uint16_t),
+    without a range check: ArduCopter SITL, whose floating-point exceptions are enabled
+    (AP_HAL_SITL/Scheduler.cpp `feenableexcept`), aborts with "Floating point exception" on
+    a MISSION_ITEM whose param1 is 1.4e37. Here the process dies the same way."""
+
+    def _on_item(self, msg, src, now):
+        value = getattr(msg, "param1", 0.0)
+        if value == value and not -1.0 < value < 65536.0:
+            raise FloatingPointError(f"param1 {value!r} does not fit the 16-bit field it is stored in")
+        return super()._on_item(msg, src, now)
+
+
+mutant("dies-on-out-of-range-param", "dies on an item whose param1 does not fit 16 bits, as ArduCopter "
+       "SITL did (a planted crash for the fuzzers: no clause sends one)", set(),
+       server_mutant(_DiesOnOutOfRangeParam))

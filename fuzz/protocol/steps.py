@@ -24,6 +24,7 @@ after every step.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -313,9 +314,10 @@ class Runner:
                 # the items went out as MISSION_ITEM, "fx"/"fy" overrides and all (with
                 # out-of-range x/y no float plan is possible: only a refusal is right)
                 _, rewrite = wire_to_items(op["items"], MissionType(op["type"]))
-                variant = float_variant(plans[0], rewrite)
-                if variant is not None and variant != plans[0]:
-                    plans = plans + (variant,)
+                for truncate in (False, True):
+                    variant = float_variant(plans[0], rewrite, truncate=truncate)
+                    if variant is not None and variant not in plans:
+                        plans = plans + (variant,)
             return [Write((MissionType(op["type"]),), plans, confirmed, maybe)]
         if op["op"] == "clear":
             types = PLAN_TYPES if op["type"] == MissionType.ALL else (MissionType(op["type"]),)
@@ -481,15 +483,21 @@ def wire_to_items(wire: list[dict[str, Any]], t: MissionType
     return items, rewrite
 
 
-def float_variant(plan: Plan, rewrite: dict[int, dict[str, Any]] | None = None) -> Plan | None:
+def float_variant(plan: Plan, rewrite: dict[int, dict[str, Any]] | None = None, *,
+                  truncate: bool = False) -> Plan | None:
     """The plan as a vehicle stores it when the items came as MISSION_ITEM (float x/y):
     each item's x/y as it went out (its int x/y converted, or the "fx"/"fy" override in
     `rewrite[seq]`), rounded to float32 by the wire and converted back the vehicle's way
     (`MissionItem.int_xy_from_float`, the spec vehicle's own). None if some item's x/y
     cannot be an int32 there (NaN, +-inf, 1e10, 215 deg): a vehicle must refuse that item
     (MAV_MISSION_INVALID_PARAM5_X / _PARAM6_Y), and one that accepts it stores a plan
-    nobody can know, which then matches no candidate and is a finding."""
-    from reference_impl.mission.items import to_float32
+    nobody can know, which then matches no candidate and is a finding.
+
+    `truncate`: the conversion a C vehicle does, a float32 product cast to int32, which
+    truncates toward zero (ArduPilot, GCS_Common.cpp `convert_MISSION_ITEM_to_MISSION_ITEM_INT`:
+    `x = packet.x * 1.0e7f`): seen on ArduCopter SITL, a rally point sent as x = -1940
+    degE7 by MISSION_ITEM came back as -1939."""
+    from reference_impl.mission.items import to_float32, xy_scale
     out = []
     for it in plan:
         fx, fy = it.float_xy()
@@ -500,6 +508,9 @@ def float_variant(plan: Plan, rewrite: dict[int, dict[str, Any]] | None = None) 
         x, y = MissionItem.int_xy_from_float(it.frame, fx, fy)
         if x is None or y is None:
             return None
+        if truncate:
+            scale = to_float32(xy_scale(it.frame))
+            x, y = (math.trunc(to_float32(fx * scale)), math.trunc(to_float32(fy * scale)))
         out.append(MissionItem(it.seq, it.frame, it.command, it.param1, it.param2, it.param3,
                                it.param4, x, y, it.z, it.current, it.autocontinue, it.mission_type))
     return tuple(out)

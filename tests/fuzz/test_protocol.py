@@ -184,3 +184,27 @@ def test_a_wall_time_budget_stops_the_search():
     units: list[int] = []
     assert search("builtin:spec", seed=1, stop_after=0.5, on_example=units.append) == []
     assert 0 < len(units) < 2000
+
+
+def test_a_float_item_may_be_stored_truncated_as_a_c_vehicle_does():
+    """Learned on ArduCopter SITL: a rally point sent by MISSION_ITEM with x = -1940 degE7
+    (float -0.000194) was stored as -1939 (`x = packet.x * 1.0e7f`, a cast that truncates).
+    Both conversions are versions the vehicle may hold; nothing else is."""
+    from fuzz.protocol.steps import float_variant
+    from reference_impl.mission.items import MissionItem, MissionType
+    plan = (MissionItem(0, 6, 5100, x=-1940, y=-5160, z=10.0, mission_type=MissionType.RALLY),)
+    rounded, truncated = float_variant(plan), float_variant(plan, truncate=True)
+    assert (rounded[0].x, rounded[0].y) == (-1940, -5160)
+    assert (truncated[0].x, truncated[0].y) == (-1939, -5159)
+    out_of_range = (MissionItem(0, 6, 5100, x=2_000_000_000, y=0, mission_type=MissionType.RALLY),)
+    assert float_variant(out_of_range, {0: {"fx": 215.0}}, truncate=True) is None
+
+
+def test_the_fuzzer_finds_the_crash_arducopter_sitl_had():
+    """Learned on ArduCopter SITL (issue 11): a float MISSION_ITEM with param1 1.4e37 killed
+    it (`cmd.p1 = packet.param1` into a uint16_t, floating-point exceptions on). The
+    mutant dies the same way; the edge floats of the strategies must reach it."""
+    cases = search("mutant:dies-on-out-of-range-param", seed=1, max_examples=100)
+    crash = [c for c in cases if c.violation.invariant == "target-crash"]
+    assert crash and "param1" in crash[0].violation.detail
+    assert replay(crash[0]).invariant == "target-crash"

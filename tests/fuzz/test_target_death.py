@@ -74,7 +74,7 @@ def test_with_a_restart_hook_the_crash_case_is_replayed_and_minimised(tmp_path):
     ring = campaign.RingCapture()
     try:
         finding = campaign.save_death(_protocol(), Case("protocol", target, 0, (*harmless, deadly), first),
-                                      tmp_path / "found", ring, campaign.Restarter(restart, timeout=20),
+                                      tmp_path / "found", ring, campaign.Restarter(restart, timeout=20, settle=0.2),
                                       until=time.monotonic() + 60)
     finally:
         for pid in pids.read_text().split() if pids.exists() else ():
