@@ -201,3 +201,26 @@ def test_protocol_fuzzing_a_single_peer_vehicle_over_udp_is_heard(tmp_path) -> N
                      "--seed", "5", "--time", "6s")
         elapsed = time.monotonic() - started
     assert code == 0 and elapsed < 6 + 20, elapsed   # the budget, and one step's bounded waits
+
+
+def test_an_exception_of_ours_is_a_tool_error_not_a_finding(tmp_path, capsys, monkeypatch) -> None:
+    """Issue 11: a bug inside mavconform during a campaign is reported apart (exit 3) with
+    the steps that led to it saved for the bug report; no finding about the target."""
+    from fuzz.protocol.steps import Runner
+
+    def broken(self, step):
+        if step.get("op") == "download":
+            raise KeyError("planted bug in the tool")
+        return Runner._real_apply(self, step)
+
+    monkeypatch.setattr(Runner, "_real_apply", Runner.apply, raising=False)
+    monkeypatch.setattr(Runner, "apply", broken)
+    found = tmp_path / "found"
+    assert main(["fuzz", "--target", "builtin:spec", "--examples", "30", "--findings", str(found),
+                 "--report-dir", str(tmp_path / "rep"), "--database", "none", "-q"]) == 3
+    err = capsys.readouterr().err
+    assert "tool error" in err and "not a finding about the target" in err and "Traceback" not in err
+    (saved,) = found.glob("protocol-tool-error-*.json")
+    assert saved.with_suffix(".txt").read_text().count("planted bug in the tool") >= 1
+    assert load_case(saved).steps[-1]["op"] == "download"
+    assert not list(found.glob("protocol-target-*.json"))
