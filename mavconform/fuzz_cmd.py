@@ -14,6 +14,8 @@ from fuzz.case import load_case
 from fuzz.outcomes import TargetUnresponsive, ToolError
 from reference_impl.errors import UsageError
 
+from .options import seconds_up_to
+
 EXIT_FINDING = 1
 EXIT_TOOL_ERROR = 3
 
@@ -90,7 +92,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--restart-cmd", metavar="CMD",
                    help="shell command that restarts a target that died, so its case can be replayed "
                         "and minimised (run before every attempt, bounded by --restart-timeout)")
-    p.add_argument("--restart-timeout", type=_seconds, default=RESTART_TIMEOUT, metavar="S",
+    p.add_argument("--restart-timeout", type=seconds_up_to(3600), default=RESTART_TIMEOUT, metavar="S",
                    help=f"longest a --restart-cmd may run, and then the wait for HEARTBEAT "
                         f"(default {RESTART_TIMEOUT:g})")
     p.add_argument("--replay", metavar="CASE.json",
@@ -265,16 +267,6 @@ def _count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r} must be at least 1")
-    return value
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
-    if not 0 < value <= 3600:
-        raise argparse.ArgumentTypeError(f"{text!r} must be more than 0 and at most 3600 seconds")
     return value
 
 

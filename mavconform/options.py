@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import signal
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 from reference_impl.net import FaultModel, McapCapture, parse_drop_rule
 
@@ -40,6 +40,16 @@ def positive(text: str) -> float:
     if value == 0:
         raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
     return value
+
+
+def seconds_up_to(high: float) -> Callable[[str], float]:
+    """An argparse type: a number of seconds, more than 0 and at most `high`."""
+    def parse(text: str) -> float:
+        value = positive(text)
+        if value > high:
+            raise argparse.ArgumentTypeError(f"{text!r} must be at most {high:g} seconds")
+        return value
+    return parse
 
 
 def _whole(text: str, low: int, high: int, what: str) -> int:

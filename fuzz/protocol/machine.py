@@ -10,8 +10,7 @@ every rule (and by `replay` after every step) through the same `Runner.check`.
 Over UDP a finding is not raised into Hypothesis: a live target does not repeat itself
 when Hypothesis runs the failing example again to report it (it raised
 `FlakyStrategyDefinition` against a crashed ArduPilot and the finding was lost). There the
-finding goes to the campaign's `CampaignState` and the campaign stops; every example after
-that is empty. An exception of our own (a `ToolFailure`) is recorded the same way, in
+finding goes to the campaign's `CampaignState` and `CampaignOver` ends the run at once. An exception of our own (a `ToolFailure`) is recorded the same way, in
 every transport, and never taken for a finding about the target.
 """
 
@@ -151,7 +150,8 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
             steps = self.steps
             if shared.side_channel and violation.invariant in DEATH_KINDS:
                 # the target's state carries over between examples: keep the last ones too
-                context = shared.previous_steps[-max(0, DEATH_CONTEXT_STEPS - len(steps)):]
+                keep = max(0, DEATH_CONTEXT_STEPS - len(steps))
+                context = shared.previous_steps[-keep:] if keep else []
                 steps = context + steps
                 if violation.step is not None:
                     violation = Violation(violation.invariant, violation.detail, violation.step + len(context))

@@ -10,11 +10,17 @@ In-process targets (`builtin:`, `mutant:`) put the vehicle on a `SimNetwork` in 
 time (deterministic from the seed, and the vehicle's store and transfer state can be read
 directly); each GCS has a link of its own, and the faults act on A's. `udp:`/`udpin:`
 targets are reached over real sockets with bounded waits, and judged from the wire only.
-There all four GCSs share one socket (`SharedLink`, routed by system id): a real vehicle's
-GCS link is bound to one peer (VARIANTS.md L1, L2) and would never hear a GCS on a socket
-of its own. The faults then act on that one link, as on a real radio link, and are lifted
-while the probe asks (`faults_lifted`), so the probe still has a clean link. Every node sits in a `GuardedNode`, so a node that raises falls
-silent and the exception is kept: a crash is a finding, never a traceback here.
+There all four GCSs share the campaign's one socket (`TargetConnection`: `SharedLink`,
+routed by system id): a real vehicle's GCS link is bound to one peer (VARIANTS.md L1, L2)
+and would never hear a GCS on a socket of its own. The faults then act on that one link, as
+on a real radio link, and are lifted while the probe asks (`faults_lifted`), so the probe
+still has a clean link. Every node sits in a `GuardedNode`, so a node that raises falls
+silent and the exception is kept: the vehicle's is a finding (`target-crash`), one of our
+GCSs' is a tool error, and neither is a traceback here.
+
+The oracles' rules (`Profile`) are the target's: its own profile in-process, the spec for a
+mutant, and for a UDP target `--profile` or the builtin profile of the autopilot family its
+HEARTBEAT names.
 """
 
 from __future__ import annotations
@@ -56,14 +62,6 @@ class Profile:
     retry_cap: bool = True            # False: retries end on a protocol timeout (PX4, P3)
     form: StoredForm = SPEC_FORM      # how it stores plans (home in slot 0, compact items)
     basis: str = "the spec"
-
-    def describe(self) -> str:
-        rules = [self.form.describe().split(" (")[0]]
-        if not self.atomic:
-            rules.append("non-atomic upload")
-        if not self.retry_cap:
-            rules.append("retries until a protocol timeout")
-        return f"{self.basis}: " + ", ".join(rules)
 
 
 def profile_from(name_or_file: str, basis: str) -> Profile:

@@ -204,7 +204,13 @@ def test_the_fuzzer_finds_the_crash_arducopter_sitl_had():
     """Learned on ArduCopter SITL (issue 11): a float MISSION_ITEM with param1 1.4e37 killed
     it (`cmd.p1 = packet.param1` into a uint16_t, floating-point exceptions on). The
     mutant dies the same way; the edge floats of the strategies must reach it."""
-    cases = search("mutant:dies-on-out-of-range-param", seed=1, max_examples=100)
-    crash = [c for c in cases if c.violation.invariant == "target-crash"]
+    # A seed's programs depend on the test selection (Hypothesis also draws constants from
+    # the modules loaded), so a few seeds are tried rather than one.
+    crash: list[Case] = []
+    for seed in range(1, 6):
+        cases = search("mutant:dies-on-out-of-range-param", seed=seed, max_examples=150)
+        crash = [c for c in cases if c.violation.invariant == "target-crash"]
+        if crash:
+            break
     assert crash and "param1" in crash[0].violation.detail
     assert replay(crash[0]).invariant == "target-crash"
