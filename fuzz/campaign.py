@@ -35,7 +35,7 @@ from reference_impl.net.sim import CaptureRecord
 from reference_impl.wire.codec import FrameDecoder
 
 from .case import Case, Violation, save_case
-from .outcomes import DEATH_KINDS, ToolError, ToolFailure
+from .outcomes import DEATH_KINDS, TargetUnresponsive, ToolError, ToolFailure
 
 MODES = ("protocol", "frames")
 SHRINK_LIMIT = 60.0          # s Hypothesis may spend shrinking one campaign's findings, at most
@@ -287,7 +287,6 @@ class Restarter:
         """None when the target is back; else why not (one line)."""
         from conformance.target_uri import parse_target
         from .protocol.connection import TargetConnection
-        from .outcomes import TargetUnresponsive
 
         self.runs += 1
         try:
@@ -331,7 +330,10 @@ def save_death(mode: ModuleType, case: Case, directory: str | Path, ring: RingCa
         why = restarter.restart(trial.target)
         if why is not None:
             raise _RestartFailed(why)
-        return mode.replay(trial)
+        try:
+            return mode.replay(trial)
+        except TargetUnresponsive as exc:
+            raise _RestartFailed(f"the restarted target stopped answering before the replay: {exc}") from None
 
     try:
         again = attempt(case)
