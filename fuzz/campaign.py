@@ -151,6 +151,13 @@ def run_campaign(options: CampaignOptions,
     except ToolError as exc:
         exc.saved = save_tool_failure(exc.failure, options, options.findings_dir)
         raise
+    except (UsageError, TargetUnresponsive):
+        raise
+    except Exception as exc:   # noqa: BLE001 - outside an example (Hypothesis, the search loop): ours too
+        failure = ToolFailure.from_exception(exc, [], options.seed)
+        error = ToolError(failure)
+        error.saved = save_tool_failure(failure, options, options.findings_dir)
+        raise error from exc
     duration = progress.elapsed
     until = time.monotonic() + SHRINK_LIMIT if deadline is None else max(deadline, time.monotonic() + SAVE_GRACE)
     restarter = Restarter(options.restart_cmd, options.restart_timeout) if options.restart_cmd else None

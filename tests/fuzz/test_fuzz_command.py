@@ -224,3 +224,20 @@ def test_an_exception_of_ours_is_a_tool_error_not_a_finding(tmp_path, capsys, mo
     assert saved.with_suffix(".txt").read_text().count("planted bug in the tool") >= 1
     assert load_case(saved).steps[-1]["op"] == "download"
     assert not list(found.glob("protocol-target-*.json"))
+
+
+def test_an_exception_outside_any_example_is_a_tool_error_too(tmp_path, capsys, monkeypatch) -> None:
+    """E.g. Hypothesis itself raising (FlakyStrategyDefinition): still ours, exit 3."""
+    import fuzz.protocol as protocol
+
+    def broken_search(*args, **kwargs):
+        raise RuntimeError("planted failure in the search loop")
+
+    monkeypatch.setattr(protocol, "search", broken_search)
+    found = tmp_path / "found"
+    assert main(["fuzz", "--target", "builtin:spec", "--examples", "3", "--findings", str(found),
+                 "--report-dir", str(tmp_path / "rep"), "--database", "none", "-q"]) == 3
+    err = capsys.readouterr().err
+    assert "tool error" in err and "planted failure in the search loop" in err and "Traceback" not in err
+    (saved,) = found.glob("protocol-tool-error-*.json")
+    assert "planted failure" in saved.with_suffix(".txt").read_text()
