@@ -228,7 +228,7 @@ def select(globs: str | None = None, levels: str | None = None) -> list[Clause]:
     """Clauses matching any of the comma-separated id globs (case-insensitive) and levels.
     A glob that matches nothing, or an unknown level, is the user's mistake."""
     chosen = list(CLAUSES)
-    if globs:
+    if globs is not None:
         patterns = [g.strip().upper() for g in globs.split(",") if g.strip()]
         if not patterns:
             raise UsageError(f"--clauses {globs!r}: no pattern given")
@@ -236,12 +236,14 @@ def select(globs: str | None = None, levels: str | None = None) -> list[Clause]:
             if not any(fnmatch.fnmatchcase(c.id, p) for c in CLAUSES):
                 raise UsageError(f"--clauses: {p!r} matches no clause (try `mavconform clauses`)")
         chosen = [c for c in chosen if any(fnmatch.fnmatchcase(c.id, p) for p in patterns)]
-    if levels:
+    if levels is not None:
         wanted = set()
         for name in (x.strip().upper() for x in levels.split(",") if x.strip()):
             try:
                 wanted.add(Level(name))
             except ValueError:
                 raise UsageError(f"--level: unknown level {name!r} (MUST, SHOULD or MAY)") from None
+        if not wanted:
+            raise UsageError(f"--level {levels!r}: no level given (MUST, SHOULD or MAY)")
         chosen = [c for c in chosen if c.level in wanted]
     return chosen

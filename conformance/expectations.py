@@ -98,8 +98,12 @@ def load(name_or_path: str) -> dict[str, Deviation]:
         if not isinstance(entry, dict):
             raise UsageError(f"{where}: must be a table")
         clause, reason = entry.get("clause"), entry.get("reason")
-        if not isinstance(clause, str) or clause not in BY_ID:
-            raise UsageError(f"{where}: unknown clause {clause!r}")
+        if "clause" not in entry:
+            raise UsageError(f"{where}: missing 'clause' (the clause id, e.g. \"MIS.UP.04\")")
+        if not isinstance(clause, str):
+            raise UsageError(f"{where}: 'clause' must be a clause id string, got {clause!r}")
+        if clause not in BY_ID:
+            raise UsageError(f"{where}: unknown clause {clause!r} (see `mavconform clauses`)")
         if not isinstance(reason, str) or not reason.strip():
             raise UsageError(f"{where}: 'reason' must be a non-empty string")
         extra = set(entry) - {"clause", "reason", "variant", "observed", "evidence", "seen_on"}

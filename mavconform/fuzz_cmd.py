@@ -221,6 +221,10 @@ def open_database(spec: str) -> Any:
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise UsageError(f"--database {spec}: exists and is not a directory")
+    try:   # Hypothesis would fail to write into it silently: make sure it can be written
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"--database {spec}: cannot create the directory ({exc.strerror or exc})") from None
     return DirectoryBasedExampleDatabase(str(path))
 
 

@@ -17,7 +17,7 @@ from reference_impl.mission.timing import Timings
 from reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
 from reference_impl.session import GcsSession, TargetUnresponsive
 
-from .options import capture_to, mavlink_id, positive, seq_number
+from .options import capture_to, mavlink_id, seconds_up_to, seq_number, time_scale
 
 DESCRIPTION = """\
 Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
@@ -59,9 +59,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     for p in (up, down, clear, setcur):
         p.add_argument("--target", required=True, metavar="URI", help="udp:HOST:PORT or udpin:HOST:PORT")
         p.add_argument("--system", type=mavlink_id, default=255, help="our system id (default 255)")
-        p.add_argument("--heartbeat-timeout", type=positive, default=5.0, metavar="S",
+        p.add_argument("--heartbeat-timeout", type=seconds_up_to(3600), default=5.0, metavar="S",
                        help="how long to wait for the target's HEARTBEAT (default 5)")
-        p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
+        p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
                        help="stretch every protocol timeout by X for slow links (default 1)")
         p.add_argument("--float", action="store_true",
                        help="download with MISSION_REQUEST / MISSION_ITEM instead of the _INT "

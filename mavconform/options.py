@@ -36,9 +36,20 @@ def non_negative(text: str) -> float:
 
 
 def positive(text: str) -> float:
-    value = non_negative(text)
-    if value == 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
+    value = _number(text)
+    if not value > 0.0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a finite number > 0")
+    return value
+
+
+MAX_TIME_SCALE = 100.0   # a stretch past this is a typo: every wait of a run times it
+
+
+def time_scale(text: str) -> float:
+    """--time-scale: more than 0, at most MAX_TIME_SCALE (1e308 would make every wait endless)."""
+    value = positive(text)
+    if value > MAX_TIME_SCALE:
+        raise argparse.ArgumentTypeError(f"{text!r} must be at most {MAX_TIME_SCALE:g}")
     return value
 
 

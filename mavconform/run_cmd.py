@@ -22,7 +22,7 @@ from conformance.clause import Clause
 from conformance.outcome import ClauseResult, Outcome
 from conformance.target_uri import FORMS
 
-from .options import positive
+from .options import time_scale
 
 MARK = {Outcome.PASS: "PASS", Outcome.FAIL: "FAIL", Outcome.KNOWN_DEVIATION: "KNOWN",
         Outcome.NOT_APPLICABLE: "N/A", Outcome.SKIPPED: "SKIP", Outcome.ERROR: "ERROR"}
@@ -44,7 +44,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="fail only on regressions: clauses that passed in this earlier run.json")
     p.add_argument("--report-dir", default="reports/out", metavar="DIR",
                    help="where the reports go (default reports/out)")
-    p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
+    p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
                    help="stretch every protocol wait by X for slow links (default 1)")
     p.add_argument("--seed", type=int, default=0, help="seed recorded in the report (default 0)")
     p.add_argument("--allow-flight", action="store_true",

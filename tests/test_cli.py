@@ -60,6 +60,9 @@ def test_dead_target_is_a_finding_not_a_hang(capsys):
     (["gcs", "download", "--target", "udp:127.0.0.1:5", "back.json"], "unknown mission file type"),
     (["gcs", "download", "--target", "udp:127.0.0.1:5", "/no/such/dir/back.plan"], "does not exist"),
     (["vehicle", "--capacity", "-1"], "0..65535"),
+    # issue 12: values that used to make a wait endless
+    (["gcs", "clear", "--target", "udp:127.0.0.1:5", "--heartbeat-timeout", "1e308"], "at most 3600"),
+    (["gcs", "clear", "--target", "udp:127.0.0.1:5", "--time-scale", "1e308"], "at most 100"),
 ])
 def test_usage_mistakes_get_one_line_and_exit_2(argv, needle, capsys):
     with pytest.raises(SystemExit) as exc_info:
@@ -90,3 +93,20 @@ def test_demo_main_job_passes():
                          timeout=120)
     assert out.returncode == 0, out.stdout + out.stderr
     assert "10/10 steps ok" in out.stdout
+
+
+def test_a_closed_pipe_is_a_normal_end_not_a_traceback():
+    """Issue 12: `mavconform clauses --mutants | head -1` must not end in BrokenPipeError."""
+    import subprocess
+    import sys
+    import os
+    read_end, write_end = os.pipe()
+    os.close(read_end)                       # the reader is gone before the first write (`head` done)
+    try:
+        done = subprocess.run([sys.executable, "-m", "mavconform", "clauses", "--mutants"],
+                              stdout=write_end, stderr=subprocess.PIPE, timeout=60)
+    finally:
+        os.close(write_end)
+    err = done.stderr.decode()
+    assert done.returncode == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err

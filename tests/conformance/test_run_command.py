@@ -90,9 +90,14 @@ def test_dead_target_is_reported_fast(tmp_path, capsys) -> None:
     (["run", "--target", "udp:127.0.0.1:99999"], "bad port"),
     (["run", "--target", "mutant:nope"], "unknown mutant"),
     (["run", "--clauses", "MIS.NOPE.*"], "matches no clause"),
+    (["run", "--clauses", ""], "no pattern given"),          # issue 12: not "run everything"
+    (["run", "--level", ""], "no level given"),
+    (["run", "--level", " , "], "no level given"),
     (["run", "--baseline", "/nonexistent/run.json"], "/nonexistent/run.json"),
     (["run", "--expect", "nosuchautopilot"], "nosuchautopilot"),
-    (["run", "--time-scale", "0"], "must be > 0"),
+    (["run", "--time-scale", "0"], "must be a finite number > 0"),
+    (["run", "--time-scale", "-1"], "must be a finite number > 0"),     # issue 12: one message for both
+    (["run", "--time-scale", "1e308"], "must be at most 100"),          # issue 12: not an endless wait
     (["report", "render", "/nonexistent/run.json"], "/nonexistent/run.json"),
 ])
 def test_usage_mistakes_get_one_line_and_exit_2(argv, message, capsys, tmp_path) -> None:
@@ -141,6 +146,12 @@ def test_expectations_file_errors_name_the_entry(tmp_path) -> None:
         expectations.load(str(bad))
     bad.write_text("deviation = 3")
     with pytest.raises(UsageError, match="array of tables"):
+        expectations.load(str(bad))
+    bad.write_text('[[deviation]]\nreason = "r"\n')       # issue 12: not "unknown clause None"
+    with pytest.raises(UsageError, match=r"x.toml: deviation\[0\]: missing 'clause'"):
+        expectations.load(str(bad))
+    bad.write_text('[[deviation]]\nclause = 4\nreason = "r"\n')
+    with pytest.raises(UsageError, match=r"deviation\[0\]: 'clause' must be a clause id string"):
         expectations.load(str(bad))
 
 
@@ -204,6 +215,8 @@ def test_pytest_plugin_runs_clauses_as_tests(tmp_path) -> None:
     assert bad.returncode == 1 and "MIS.UP.16" in bad.stdout
     usage = pytest_run("--mavlink-target", "nope:1")
     assert usage.returncode == 4 and "unknown scheme" in usage.stderr
+    forgot = pytest_run()                       # issue 12: not "1 skipped", exit 0
+    assert forgot.returncode == 4 and "needs --mavlink-target" in forgot.stdout + forgot.stderr
 
 
 def test_no_reply_leaks_into_the_next_clause(tmp_path, capsys) -> None:

@@ -75,9 +75,11 @@ def test_a_replayed_case_that_no_longer_fails_exits_0(tmp_path, capsys) -> None:
     (["--target", "builtin:spec", "--profile", "px4"], "--profile applies to udp:/udpin: targets"),
     (["--target", "udp:127.0.0.1:9", "--profile", "no-such-profile"], "no-such-profile"),
     (["--database", "redis-ish://x"], "--database"),
+    (["--database", "plain-file/db"], "cannot create the directory"),   # issue 12: not silently nothing
 ])
 def test_usage_mistakes_exit_2_with_one_line(tmp_path, capsys, monkeypatch, args, says) -> None:
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "plain-file").write_text("not a folder")
     assert main(["fuzz", *args]) == 2
     err = capsys.readouterr().err.strip()
     assert says in err and "\n" not in err
