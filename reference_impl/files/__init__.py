@@ -31,12 +31,26 @@ def load_plan(path: str | Path) -> Plan:
     except OSError as error:
         raise PlanFileError(f"{source}: cannot read: {error.strerror or error}") from None
     if Path(path).suffix.lower() == PLAN_SUFFIX:
-        return parse_qgc_plan(text, source)
+        return _sendable(parse_qgc_plan(text, source), source)
     first_line = text.splitlines()[0] if text else ""
     if looks_like_wpl(first_line):
-        return parse_wpl(text, source)
+        return _sendable(parse_wpl(text, source), source)
     raise PlanFileError(f"{source}:1: not a mission file: expected a .plan file or the header "
                         f"{WPL_HEADER!r}, found {first_line.strip()[:40]!r}")
+
+
+MAX_ITEMS = 0xFFFF   # MISSION_COUNT.count is a uint16_t: no plan type holds more on the wire
+
+
+def _sendable(plan: Plan, source: str) -> Plan:
+    """A plan type longer than MISSION_COUNT can say is the file's fault, said up front
+    (it used to end in a struct.error while encoding the count)."""
+    for t in PLAN_TYPES:
+        n = len(plan.items(t))
+        if n > MAX_ITEMS:
+            raise PlanFileError(f"{source}: the {t.label} plan has {n} items; MAVLink can send at most "
+                                f"{MAX_ITEMS} (MISSION_COUNT.count is 16 bits)")
+    return plan
 
 
 def plan_types_in(path: str | Path) -> tuple[MissionType, ...]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ipaddress
 import re
+import socket
 from dataclasses import dataclass
 
 from ..errors import UsageError
@@ -65,6 +66,8 @@ def parse_udp_uri(text: str, *, listen: bool = False) -> UdpUri:
             raise bad(f"bad host {host!r}: not an IPv4 address")
     elif not _HOSTNAME.fullmatch(host):
         raise bad(f"bad host {host!r}")
+    elif not _resolves(host):   # said now, not later as "no HEARTBEAT from the target"
+        raise UsageError(f"bad endpoint {text!r}: cannot resolve host {host!r}")
     if not port_text.isdigit() or not port_text.isascii():
         raise bad(f"bad port {port_text!r}: not a number")
     port = int(port_text)
@@ -73,6 +76,14 @@ def parse_udp_uri(text: str, *, listen: bool = False) -> UdpUri:
     if port == 0 and mode == "udp" and not listen:
         raise bad("port 0 is only allowed for udpin (we cannot send to port 0)")
     return UdpUri(mode, host, port)
+
+
+def _resolves(host: str) -> bool:
+    try:
+        socket.getaddrinfo(host, None, type=socket.SOCK_DGRAM)
+    except (socket.gaierror, UnicodeError):
+        return False
+    return True
 
 
 def _is_ip(text: str, *, version: int) -> bool:

@@ -249,3 +249,21 @@ def test_unwritable_mission_and_home_are_refused(tmp_path: Path) -> None:
         lambda: save_plan(infinite, path), path)
     bad_home = plan_from_items(home=(95.0, 8.0, 0.0))
     assert "home: latitude 95.0 is outside [-90, 90]" in one_line_error(lambda: save_plan(bad_home, path), path)
+
+
+def test_a_plan_longer_than_mission_count_can_say_is_refused_up_front(tmp_path):
+    """Issue 12: a .plan of 70,000 items ended in a struct.error traceback at upload."""
+    import json
+
+    from reference_impl.files import PlanFileError, load_plan
+    item = {"type": "SimpleItem", "autoContinue": True, "command": 16, "frame": 3,
+            "params": [0, 0, 0, None, 47.0, 8.0, 50]}
+    doc = {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+           "mission": {"version": 2, "items": [dict(item, doJumpId=i + 1) for i in range(70_000)],
+                       "plannedHomePosition": [47.0, 8.0, 0]},
+           "geoFence": {"version": 2, "polygons": [], "circles": []},
+           "rallyPoints": {"version": 2, "points": []}}
+    path = tmp_path / "big.plan"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(PlanFileError, match=r"big.plan: the mission plan has 70000 items; .* at most 65535"):
+        load_plan(path)
