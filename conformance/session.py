@@ -13,6 +13,7 @@ import time
 
 from typing import Any, Callable
 
+from reference_impl.mission.messages import is_vehicle_heartbeat
 from reference_impl.net.guard import GuardedNode
 from reference_impl.net.shared_link import SharedLink
 from reference_impl.net.sim import CaptureHook, SimNetwork
@@ -22,7 +23,7 @@ from reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.tester import Tester, record_traffic
 from .harness.stored_form import form_for_autopilot, form_of_behaviour
-from .harness.tester_node import MAV_AUTOPILOT_INVALID, MAV_TYPE_GCS, TesterNode
+from .harness.tester_node import TesterNode
 from .outcome import TargetUnresponsive
 from .target_uri import TargetUri
 
@@ -119,8 +120,7 @@ class Session:
         def heartbeat() -> bool:
             for _, frame in node.inbox:
                 msg = frame.msg
-                if msg._type == "HEARTBEAT" and msg.type != MAV_TYPE_GCS \
-                        and msg.autopilot != MAV_AUTOPILOT_INVALID:
+                if is_vehicle_heartbeat(msg):
                     found.append(frame)
                     return True
             return False

@@ -29,6 +29,7 @@ from types import ModuleType
 from typing import Any, Callable, Iterator
 
 from reference_impl.errors import UsageError
+from reference_impl.mission.messages import is_vehicle_heartbeat
 from conformance.harness.exchange import MAX_EVENTS, message_fields
 from reference_impl.net.capture import McapCapture
 from reference_impl.net.sim import CaptureRecord
@@ -48,7 +49,6 @@ RESTART_SETTLE = 8.0         # s after a restarted target's first HEARTBEAT befo
                              # SITL just booted refuses uploads for a few seconds (ArduCopter did)
 # What a hand-edited case can make a mode's replay raise (bad types or values in its steps).
 MALFORMED = (ValueError, TypeError, KeyError, AttributeError, IndexError, OverflowError, struct.error)
-MAV_AUTOPILOT_INVALID = 8    # what a GCS puts in its HEARTBEAT
 
 
 def load_mode(name: str) -> ModuleType:
@@ -443,8 +443,7 @@ class ExchangeRecorder:
                 continue
             decoded += 1
             name = msg.get_type()
-            if (name == "HEARTBEAT" and self._target is None
-                    and getattr(msg, "autopilot", MAV_AUTOPILOT_INVALID) != MAV_AUTOPILOT_INVALID):
+            if self._target is None and is_vehicle_heartbeat(msg):
                 self._target = record.src
             if name in ("HEARTBEAT", "GLOBAL_POSITION_INT"):
                 continue

@@ -16,19 +16,16 @@ from typing import Any, Callable, Sequence
 
 from .endpoint import MavlinkEndpoint
 from .mission.actions import Finished, Peer
+from .mission import messages as m
 from .mission.adaptations import NONE, Adaptations, for_autopilot
 from .mission.client import MissionClient
 from .mission.items import MissionItem, MissionType
 from .mission.results import OperationResult
 from .mission.timing import Timings
 from .net.node import Address
-from .wire.dialect import mavlink as _d
 from .wire.signing import SigningKey
 
-MAV_TYPE_GCS = 6
-MAV_AUTOPILOT_INVALID = 8
 MAV_COMP_ID_MISSIONPLANNER = 190
-HEARTBEAT_PERIOD = 1.0
 
 
 @dataclass(frozen=True)
@@ -113,8 +110,8 @@ class GcsNode:
         if self.client is not None:
             self._run(self.client.poll(now))
         if self._next_heartbeat is not None and now >= self._next_heartbeat:
-            self._next_heartbeat = now + HEARTBEAT_PERIOD
-            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3))
+            self._next_heartbeat = now + m.HEARTBEAT_PERIOD
+            self.endpoint.send(m.gcs_heartbeat_message())
 
     def next_deadline(self) -> float | None:
         client = self.client.next_deadline() if self.client is not None else None
@@ -128,7 +125,7 @@ class GcsNode:
     # --- internals ------------------------------------------------------------------------
     def _maybe_discover(self, frame: Any) -> None:
         msg = frame.msg
-        if frame.name == "HEARTBEAT" and msg.type != MAV_TYPE_GCS and msg.autopilot != MAV_AUTOPILOT_INVALID:
+        if m.is_vehicle_heartbeat(msg):
             self.target = frame.source
             self.target_heartbeat = msg
             self._adapt_to(msg)

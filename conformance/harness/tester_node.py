@@ -12,12 +12,9 @@ from typing import Any, Callable
 
 from reference_impl.endpoint import MavlinkEndpoint
 from reference_impl.net.node import Address
-from reference_impl.wire.dialect import mavlink as _d
+from reference_impl.mission import messages as m
 from reference_impl.wire.frame import Frame
 
-MAV_TYPE_GCS = 6
-MAV_AUTOPILOT_INVALID = 8
-HEARTBEAT_PERIOD = 1.0
 
 
 class TesterNode:
@@ -48,9 +45,8 @@ class TesterNode:
 
     def poll(self, now: float) -> None:
         if self.heartbeats and self._next_heartbeat is not None and now >= self._next_heartbeat:
-            self._next_heartbeat = now + HEARTBEAT_PERIOD
-            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3),
-                               self.target)
+            self._next_heartbeat = now + m.HEARTBEAT_PERIOD
+            self.endpoint.send(m.gcs_heartbeat_message(), self.target)
 
     def next_deadline(self) -> float | None:
         return self._next_heartbeat if self.heartbeats else None

@@ -36,7 +36,7 @@ def _item(seq: int, command: int = Cmd.NAV_WAYPOINT, mt: MissionType = MISSION, 
 
 
 def _heartbeat(_t: Target) -> Any:
-    return _d.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3)   # MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID
+    return m.gcs_heartbeat_message()
 
 
 def _cmd_long(command: int, p1: float = 0.0) -> Callable[[Target], Any]:

@@ -19,19 +19,17 @@ from typing import Any
 
 from conformance.target_uri import TargetUri
 from reference_impl.endpoint import MavlinkEndpoint
+from reference_impl.mission.messages import HEARTBEAT_PERIOD, gcs_heartbeat_message, is_vehicle_heartbeat
 from reference_impl.net import FaultModel, UdpDriver
 from reference_impl.net.node import Address
 from reference_impl.net.shared_link import SharedLink
 from reference_impl.net.sim import CaptureHook
 from reference_impl.net.uri import local_bind_for
-from reference_impl.wire.dialect import mavlink as _d
 
 from ..outcomes import TargetUnresponsive
 from .faults import install
 
 DISCOVERY_TIMEOUT = 5.0   # s for the target's first HEARTBEAT
-MAV_TYPE_GCS = 6
-MAV_AUTOPILOT_INVALID = 8
 WATCH_SYSTEM, WATCH_COMPONENT = 245, 190   # GCS A's ids: the watch speaks only to be found
 # What a vehicle says in answer to a GCS (streams such as MISSION_CURRENT are not answers).
 REPLIES = frozenset({"MISSION_ACK", "MISSION_COUNT", "MISSION_REQUEST", "MISSION_REQUEST_INT",
@@ -58,7 +56,7 @@ class Watch:
             if msg._type in REPLIES and (frame.src_system, frame.src_component) == self.target:
                 self.last_reply = now
                 continue
-            if msg._type != "HEARTBEAT" or msg.type == MAV_TYPE_GCS or msg.autopilot == MAV_AUTOPILOT_INVALID:
+            if not is_vehicle_heartbeat(msg):
                 continue
             ids = (frame.src_system, frame.src_component)
             if self.target is None:
@@ -69,8 +67,8 @@ class Watch:
 
     def poll(self, now: float) -> None:
         if self._next_beat is not None and now >= self._next_beat:
-            self._next_beat = now + 1.0
-            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3))
+            self._next_beat = now + HEARTBEAT_PERIOD
+            self.endpoint.send(gcs_heartbeat_message())
 
     def next_deadline(self) -> float | None:
         return self._next_beat

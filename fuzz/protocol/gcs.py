@@ -20,17 +20,14 @@ import time
 from typing import Any, Callable, Sequence
 
 from reference_impl.endpoint import MavlinkEndpoint
+from reference_impl.mission import messages as m
 from reference_impl.mission.actions import Finished, Peer, Send
 from reference_impl.mission.client import MissionClient
 from reference_impl.mission.items import MissionItem, MissionType
 from reference_impl.mission.results import OperationResult
 from reference_impl.mission.timing import Timings
 from reference_impl.net.node import Address
-from reference_impl.wire.dialect import mavlink as _d
 
-MAV_TYPE_GCS = 6
-MAV_AUTOPILOT_INVALID = 8
-HEARTBEAT_PERIOD = 1.0
 _ITEMS = ("MISSION_ITEM_INT", "MISSION_ITEM")
 # Rewrite keys that stand for MISSION_ITEM's float x/y (and mean nothing for MISSION_ITEM_INT).
 FLOAT_XY = {"fx": "x", "fy": "y"}
@@ -123,8 +120,7 @@ class FuzzGcs:
         for frame in self.endpoint.receive(data, source):
             msg = frame.msg
             if self.target is None:
-                if (msg._type == "HEARTBEAT" and msg.type != MAV_TYPE_GCS
-                        and msg.autopilot != MAV_AUTOPILOT_INVALID):
+                if m.is_vehicle_heartbeat(msg):
                     self.set_target((frame.src_system, frame.src_component))
                 continue
             if (frame.src_system, frame.src_component) != self.target:
@@ -141,8 +137,8 @@ class FuzzGcs:
         if self.client is not None:
             self._run(self.client.poll(now))
         if self._next_heartbeat is not None and now >= self._next_heartbeat:
-            self._next_heartbeat = now + HEARTBEAT_PERIOD
-            self.endpoint.send(_d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3))
+            self._next_heartbeat = now + m.HEARTBEAT_PERIOD
+            self.endpoint.send(m.gcs_heartbeat_message())
 
     def next_deadline(self) -> float | None:
         d = self.client.next_deadline() if self.client is not None else None
