@@ -83,14 +83,14 @@ import hashlib
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, NamedTuple
 
+from reference_impl.wire.codec import IFLAG_SIGNED
+from reference_impl.wire.codec import MAGIC_V1 as STX_V1      # MAVLINK_STX_MAVLINK1
+from reference_impl.wire.codec import MAGIC_V2 as STX_V2      # MAVLINK_STX
+from reference_impl.wire.codec import SIGNATURE_LEN as SIGNATURE_BLOCK_LEN
 from reference_impl.wire.signing import signing_timestamp
 
-from .wire import _DIALECT, _X25
+from .wire import _DIALECT, crc16
 
-STX_V2 = 0xFD
-STX_V1 = 0xFE
-IFLAG_SIGNED = 0x01
-SIGNATURE_BLOCK_LEN = 13
 MAX_SIGNING_STREAMS = 16
 SIGNING_TIMESTAMP_LIMIT = 60 * 100_000      # MAVLINK_SIGNING_TIMESTAMP_LIMIT s, in 10 us units
 
@@ -130,23 +130,6 @@ class MessageTable:
 
 
 DIALECT_TABLE = MessageTable.of(_DIALECT)   # our own dialect, as fuzz/frames/wire.py uses it
-
-_CRC_CACHE: dict[tuple[bytes, int], int] = {}
-
-
-def _checksum(body: bytes, extra: int) -> int:
-    """X.25 over `body` then CRC_EXTRA, by the dialect's x25crc (cached: fuzz frames repeat)."""
-    key = (body, extra)
-    crc = _CRC_CACHE.get(key)
-    if crc is None:
-        x = _X25(body)
-        x.accumulate(bytes((extra,)))
-        crc = x.crc
-        if len(_CRC_CACHE) > 50_000:
-            _CRC_CACHE.clear()
-        _CRC_CACHE[key] = crc
-    return crc
-
 
 class ParsedFrame(NamedTuple):
     """A frame the parser completed (or, from `awaiting_signature`, is completing).
@@ -290,7 +273,7 @@ class CParser:
                 msgid = buf[p + 6] | buf[p + 7] << 8 | buf[p + 8] << 16
             entry = entries.get(msgid)
             crc_ok = entry is not None and \
-                _checksum(buf[p:crc_at], entry[1]) == buf[crc_at] | buf[crc_at + 1] << 8
+                crc16(buf[p:crc_at], entry[1]) == buf[crc_at] | buf[crc_at + 1] << 8
             signed = bool(iflags & IFLAG_SIGNED)
             end = crc_at + 2
             if signed and not crc_ok:
@@ -380,7 +363,7 @@ class CParser:
         if not signed or len(buf) < crc_at + 2:
             return None
         entry = self.table.entries.get(msgid)
-        good = entry is not None and _checksum(buf[1:crc_at], entry[1]) == buf[crc_at] | buf[crc_at + 1] << 8
+        good = entry is not None and crc16(buf[1:crc_at], entry[1]) == buf[crc_at] | buf[crc_at + 1] << 8
         s = self._start
         return ParsedFrame(s, s + crc_at + 2 + SIGNATURE_BLOCK_LEN, s + crc_at, msgid, OK if good else BAD_CRC,
                            False, True, buf[5], buf[6])
@@ -414,7 +397,7 @@ class CParser:
             return "GOT_PAYLOAD"
         msgid = buf[5] if v1 else buf[7] | buf[8] << 8 | buf[9] << 16
         entry = self.table.entries.get(msgid)
-        crc = _checksum(buf[1:crc_at], entry[1]) if entry is not None else None
+        crc = crc16(buf[1:crc_at], entry[1]) if entry is not None else None
         if k == crc_at + 1:
             return "GOT_CRC1" if crc is not None and crc & 0xFF == buf[crc_at] else "GOT_BAD_CRC1"
         good = crc is not None and crc == buf[crc_at] | buf[crc_at + 1] << 8

@@ -50,11 +50,27 @@ def crc_extra(mid: int) -> int:
     return cls.crc_extra if cls is not None else 0
 
 
+_CRC_CACHE: dict[tuple[bytes, int], int] = {}
+
+
+def crc16(body: bytes, extra: int) -> int:
+    """X.25 over `body` (len .. end of payload) then CRC_EXTRA, by the dialect's x25crc;
+    cached, since fuzz frames and the parser model's re-reads repeat the same bodies."""
+    key = (body, extra)
+    crc = _CRC_CACHE.get(key)
+    if crc is None:
+        x = _X25(body)
+        x.accumulate(bytes((extra,)))
+        crc = x.crc
+        if len(_CRC_CACHE) > 50_000:
+            _CRC_CACHE.clear()
+        _CRC_CACHE[key] = crc
+    return crc
+
+
 def checksum(body: bytes, extra: int) -> bytes:
-    """X.25 checksum of `body` (len .. end of payload) and CRC_EXTRA, little-endian."""
-    crc = _X25(body)
-    crc.accumulate(bytes([extra]))
-    return crc.crc.to_bytes(2, "little")
+    """The X.25 checksum of `body` and CRC_EXTRA as it goes on the wire (little-endian)."""
+    return crc16(body, extra).to_bytes(2, "little")
 
 
 def rechecksum(frame: bytes, extra: int | None = None) -> bytes:
