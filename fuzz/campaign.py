@@ -180,27 +180,29 @@ def run_campaign(options: CampaignOptions,
 MINIMISE_REPLAYS = 400       # bound on the replays the step-removal pass may spend per finding
 
 
-def set_shrink_time_limit(seconds: float) -> None:
-    """Change the bound while a search runs (Hypothesis reads it when shrinking begins)."""
+def _shrink_engine() -> ModuleType | None:
+    """Hypothesis's engine module, whose MAX_SHRINKING_SECONDS is the only handle it offers
+    on shrinking time; None if a later version drops it (shrinking keeps its own cap)."""
     try:
         from hypothesis.internal.conjecture import engine
-    except ImportError:      # pragma: no cover
-        return
-    if hasattr(engine, "MAX_SHRINKING_SECONDS"):
+    except ImportError:      # pragma: no cover - a Hypothesis without that module
+        return None
+    return engine if hasattr(engine, "MAX_SHRINKING_SECONDS") else None
+
+
+def set_shrink_time_limit(seconds: float) -> None:
+    """Change the bound while a search runs (Hypothesis reads it when shrinking begins)."""
+    engine = _shrink_engine()
+    if engine is not None:
         engine.MAX_SHRINKING_SECONDS = max(0.5, seconds)
 
 
 @contextlib.contextmanager
 def shrink_time_limit(seconds: float) -> Iterator[None]:
-    """Bound the time Hypothesis spends shrinking (its own cap is 300 s per test). This sets
-    a module constant of Hypothesis's engine, the only handle it offers; if a later version
-    drops it, shrinking keeps Hypothesis's own cap."""
-    try:
-        from hypothesis.internal.conjecture import engine
-    except ImportError:      # pragma: no cover - a Hypothesis without that module
-        yield
-        return
-    if not hasattr(engine, "MAX_SHRINKING_SECONDS"):
+    """Bound the time Hypothesis spends shrinking (its own cap is 300 s per test), restored
+    afterwards."""
+    engine = _shrink_engine()
+    if engine is None:
         yield
         return
     before = engine.MAX_SHRINKING_SECONDS

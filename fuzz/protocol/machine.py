@@ -107,7 +107,13 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
     shared = state if state is not None else CampaignState()
 
     def _spent() -> bool:
-        return shared.stopped or (stop_at is not None and time.monotonic() >= stop_at)
+        """Past the budget, or the campaign has what ended it. Over UDP that ends the
+        Hypothesis run at once (`CampaignOver`); in-process the example goes on empty, since
+        Hypothesis may be shrinking a finding."""
+        spent = shared.stopped or (stop_at is not None and time.monotonic() >= stop_at)
+        if spent and shared.side_channel:
+            raise CampaignOver()
+        return spent
 
     class ProtocolMachine(RuleBasedStateMachine):
         def __init__(self) -> None:
@@ -118,8 +124,6 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
 
         @initialize(seed=st.integers(0, 2**32 - 1))
         def connect(self, seed: int) -> None:
-            if _spent() and shared.side_channel:
-                raise CampaignOver()
             self.seed = seed
             if not _spent():   # past the budget the example is empty: no world to open
                 self._guarded(lambda: setattr(self, "runner", Runner(
@@ -127,8 +131,6 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
                     profile=knobs.profile)))
 
         def _do(self, step: dict[str, Any]) -> None:
-            if _spent() and shared.side_channel:
-                raise CampaignOver()
             if _spent() or self.runner is None:
                 return
             self.steps.append(step)

@@ -390,20 +390,10 @@ class Runner:
         a MISSION_COUNT (or any MISSION_ACK, e.g. DENIED) to it is an answer. A download it
         opens is closed at once, so the probe leaves the vehicle as it found it."""
         w = self.world
-        probe, target = w.probe, w.target
         t = w.profile.timings
-        me = probe.system
-
-        def answered() -> bool:
-            return any(msg._type in ("MISSION_COUNT", "MISSION_ACK") and msg.target_system == me
-                       for msg in probe.heard)
-
-        tries = t.max_retries + 1
         with w.faults_lifted():
-            for _ in range(tries):
-                probe.listen()
-                probe.send_raw(m.request_list_message(MissionType.MISSION, target))
-                if w.run_until(answered, t.default_timeout):
+            for _ in range(t.max_retries + 1):
+                if self._ask_list(MissionType.MISSION):
                     return self._counted(MissionType.MISSION) or (
                         None if w.virtual else self._other_counts())
                 age = w.heartbeat_age()
@@ -420,6 +410,16 @@ class Runner:
                 f"the target fell silent: no HEARTBEAT for {_seconds(age)} and no answer to {asked}"))
         beating = "" if age is None else " although its HEARTBEAT still comes"
         return self._violation("target-hang", f"the vehicle did not answer {asked}{beating}")
+
+    def _ask_list(self, t: MissionType) -> bool:
+        """The probe asks for `t`'s list once: a MISSION_COUNT (or any MISSION_ACK, e.g.
+        DENIED) to it within the profile's timeout is an answer."""
+        w, probe = self.world, self.world.probe
+        me = probe.system
+        probe.listen()
+        probe.send_raw(m.request_list_message(t, w.target))
+        return w.run_until(lambda: any(msg._type in ("MISSION_COUNT", "MISSION_ACK") and msg.target_system == me
+                                       for msg in probe.heard), w.profile.timings.default_timeout)
 
     def _counted(self, t: MissionType) -> Violation | None:
         """Judge the MISSION_COUNT the probe heard for `t` (if any) against the lengths of
@@ -439,13 +439,8 @@ class Runner:
         """Over the wire the store cannot be read: the fence and rally counts are asked
         too (one try each, a few milliseconds), so a plan of the wrong length is seen after
         the step that made it, not only when a download happens to follow."""
-        w, probe = self.world, self.world.probe
-        me = probe.system
         for t in (MissionType.FENCE, MissionType.RALLY):
-            probe.listen()
-            probe.send_raw(m.request_list_message(t, w.target))
-            if w.run_until(lambda: any(msg._type in ("MISSION_COUNT", "MISSION_ACK") and msg.target_system == me
-                                       for msg in probe.heard), w.profile.timings.default_timeout):
+            if self._ask_list(t):
                 v = self._counted(t)
                 if v is not None:
                     return v

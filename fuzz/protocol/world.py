@@ -64,12 +64,16 @@ class Profile:
     basis: str = "the spec"
 
 
+def rules_of(behaviour: Any, basis: str) -> Profile:
+    """The oracle rules a vehicle behaviour (a profile's knobs) implies."""
+    return Profile(atomic=behaviour.atomic_upload, timings=behaviour.timings,
+                   retry_cap=behaviour.retry_cap, form=form_of_behaviour(behaviour, basis), basis=basis)
+
+
 def profile_from(name_or_file: str, basis: str) -> Profile:
     """The oracle rules of a vehicle profile (builtin name or TOML file)."""
     from reference_impl.profiles import load_profile
-    b = load_profile(name_or_file).behaviour
-    return Profile(atomic=b.atomic_upload, timings=b.timings, retry_cap=b.retry_cap,
-                   form=form_of_behaviour(b, basis), basis=basis)
+    return rules_of(load_profile(name_or_file).behaviour, basis)
 
 
 def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | None = None,
@@ -80,9 +84,7 @@ def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | No
     if uri.kind == "mutant":
         return Profile()
     if vehicle is not None:
-        b = vehicle.server.behaviour
-        return Profile(atomic=b.atomic_upload, timings=b.timings, retry_cap=b.retry_cap,
-                       form=form_of_behaviour(b, f"the {uri} profile"), basis=f"the {uri} profile")
+        return rules_of(vehicle.server.behaviour, f"the {uri} profile")
     if chosen is not None:
         return profile_from(chosen, f"profile {chosen} (--profile)")
     name = profile_for_autopilot(autopilot)

@@ -218,8 +218,7 @@ def test_an_exception_of_ours_is_a_tool_error_not_a_finding(tmp_path, capsys, mo
     monkeypatch.setattr(Runner, "_real_apply", Runner.apply, raising=False)
     monkeypatch.setattr(Runner, "apply", broken)
     found = tmp_path / "found"
-    assert main(["fuzz", "--target", "builtin:spec", "--examples", "30", "--findings", str(found),
-                 "--report-dir", str(tmp_path / "rep"), "--database", "none", "-q"]) == 3
+    assert _fuzz(tmp_path, "--target", "builtin:spec", "--examples", "30", "--database", "none") == 3
     err = capsys.readouterr().err
     assert "tool error" in err and "not a finding about the target" in err and "Traceback" not in err
     (saved,) = found.glob("protocol-tool-error-*.json")
@@ -237,8 +236,7 @@ def test_an_exception_outside_any_example_is_a_tool_error_too(tmp_path, capsys, 
 
     monkeypatch.setattr(protocol, "search", broken_search)
     found = tmp_path / "found"
-    assert main(["fuzz", "--target", "builtin:spec", "--examples", "3", "--findings", str(found),
-                 "--report-dir", str(tmp_path / "rep"), "--database", "none", "-q"]) == 3
+    assert _fuzz(tmp_path, "--target", "builtin:spec", "--examples", "3", "--database", "none") == 3
     err = capsys.readouterr().err
     assert "tool error" in err and "planted failure in the search loop" in err and "Traceback" not in err
     (saved,) = found.glob("protocol-tool-error-*.json")
