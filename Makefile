@@ -42,7 +42,7 @@ run-mavsdk: $(VENV)/.interop-installed  ## the suite vs MAVSDK's MissionRawServe
 	for i in $$(seq 100); do grep -q '^listening on' $(MAVSDK_OUT)/vehicle.out && break; kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
 	target=$$(sed -n 's/^listening on \(udp:127\.0\.0\.1:[0-9]*\) .*/\1/p' $(MAVSDK_OUT)/vehicle.out); \
 	if [ -z "$$target" ]; then echo "run-mavsdk: the MAVSDK vehicle did not start:" >&2; cat $(MAVSDK_OUT)/vehicle.log >&2; exit 1; fi; \
-	clauses=$$($(BIN)/python -c "from conformance.catalogue import CLAUSES; skip = set('$(MAVSDK_SKIP)'.split()); print(','.join(c.id for c in CLAUSES if c.id not in skip))"); \
+	clauses=$$($(BIN)/python -c "from mavconform.conformance.catalogue import CLAUSES; skip = set('$(MAVSDK_SKIP)'.split()); print(','.join(c.id for c in CLAUSES if c.id not in skip))"); \
 	echo "run-mavsdk: MAVSDK MissionRawServer at $$target; not run: $(MAVSDK_SKIP)"; \
 	timeout 600 $(BIN)/mavconform run --target $$target --expect mavsdk --clauses "$$clauses" --report-dir $(MAVSDK_OUT) -q
 

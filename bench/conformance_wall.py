@@ -26,11 +26,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from conformance import catalogue  # noqa: E402
-from conformance.outcome import Outcome  # noqa: E402
-from conformance.runner import run_clauses  # noqa: E402
-from conformance.session import Session  # noqa: E402
-from conformance.target_uri import parse_target  # noqa: E402
+from mavconform.conformance import catalogue  # noqa: E402
+from mavconform.conformance.outcome import Outcome  # noqa: E402
+from mavconform.conformance.runner import run_clauses  # noqa: E402
+from mavconform.conformance.session import Session  # noqa: E402
+from mavconform.conformance.target_uri import parse_target  # noqa: E402
 
 
 def measure(uri: str, clauses, *, virtual: bool = False) -> tuple[float, float, float, int]:

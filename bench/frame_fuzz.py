@@ -24,13 +24,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fuzz.case import dump_case, save_case  # noqa: E402
-from fuzz.frames import FrameCampaign  # noqa: E402
-from fuzz.frames.admission import Admission  # noqa: E402
-from fuzz.frames.mutators import MutationContext  # noqa: E402
-from fuzz.frames.program import CHUNK, RECORD, Builder, parse  # noqa: E402
-from fuzz.frames.rig import campaign_key  # noqa: E402
-from reference_impl.wire.codec import FrameDecoder  # noqa: E402
+from mavconform.fuzz.case import dump_case, save_case  # noqa: E402
+from mavconform.fuzz.frames import FrameCampaign  # noqa: E402
+from mavconform.fuzz.frames.admission import Admission  # noqa: E402
+from mavconform.fuzz.frames.mutators import MutationContext  # noqa: E402
+from mavconform.fuzz.frames.program import CHUNK, RECORD, Builder, parse  # noqa: E402
+from mavconform.fuzz.frames.rig import campaign_key  # noqa: E402
+from mavconform.reference_impl.wire.codec import FrameDecoder  # noqa: E402
 
 
 def decoder_rate(seed: int, frames: int = 60_000) -> float:

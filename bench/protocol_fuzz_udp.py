@@ -64,8 +64,8 @@ from typing import Any, Callable, Iterator
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fuzz.protocol import Knobs, search  # noqa: E402
-from fuzz.protocol.search import udp_knobs  # noqa: E402
+from mavconform.fuzz.protocol import Knobs, search  # noqa: E402
+from mavconform.fuzz.protocol.search import udp_knobs  # noqa: E402
 
 UDP_KNOBS = udp_knobs("udp:127.0.0.1:0")   # what `mavconform fuzz` uses against a UDP target
 
@@ -74,12 +74,12 @@ def _knobs(args: Any) -> Knobs:
     """The campaign's UDP knobs, with the bench's overrides."""
     import dataclasses
     return dataclasses.replace(UDP_KNOBS, faults=not args.no_faults, max_wait=args.max_wait)
-from fuzz.protocol import machine as machine_mod  # noqa: E402
-from fuzz.protocol import steps as steps_mod  # noqa: E402
-from fuzz.protocol import world as world_mod  # noqa: E402
-from fuzz.protocol.gcs import FuzzGcs  # noqa: E402
-from fuzz.protocol.steps import Runner  # noqa: E402
-from reference_impl.net import UdpDriver  # noqa: E402
+from mavconform.fuzz.protocol import machine as machine_mod  # noqa: E402
+from mavconform.fuzz.protocol import steps as steps_mod  # noqa: E402
+from mavconform.fuzz.protocol import world as world_mod  # noqa: E402
+from mavconform.fuzz.protocol.gcs import FuzzGcs  # noqa: E402
+from mavconform.fuzz.protocol.steps import Runner  # noqa: E402
+from mavconform.reference_impl.net import UdpDriver  # noqa: E402
 
 LISTENING = "listening on udp:127.0.0.1:"
 FAST = 0.02        # s: a reply later than this after the previous cut waited on a timer
@@ -271,7 +271,7 @@ def instrumented(ph: Phases) -> Iterator[None]:
     W, R = world_mod.World, steps_mod.Runner
     timed(W, "__init__", "world.open")
     try:   # one connection per campaign (newer trees): its discovery is a phase of its own
-        from fuzz.protocol import connection as connection_mod
+        from mavconform.fuzz.protocol import connection as connection_mod
         timed(connection_mod.TargetConnection, "__init__", "connection.open")
     except ImportError:
         pass
@@ -427,8 +427,8 @@ def replay_vehicle(profile: str | None) -> Iterator[str]:
         return
     import dataclasses
 
-    from reference_impl.profiles import load_profile
-    from reference_impl.vehicle import VehicleNode
+    from mavconform.reference_impl.profiles import load_profile
+    from mavconform.reference_impl.vehicle import VehicleNode
     config = load_profile(profile).config
     saved = world_mod.build_vehicle
 

@@ -16,12 +16,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from reference_impl.gcs import GcsNode  # noqa: E402
-from reference_impl.mission.items import MissionItem, MissionType  # noqa: E402
-from reference_impl.net import FaultModel, SimNetwork  # noqa: E402
-from reference_impl.session import GcsSession  # noqa: E402
-from reference_impl.vehicle import VehicleNode  # noqa: E402
-from reference_impl.wire.dialect import mavlink as dialect  # noqa: E402
+from mavconform.reference_impl.gcs import GcsNode  # noqa: E402
+from mavconform.reference_impl.mission.items import MissionItem, MissionType  # noqa: E402
+from mavconform.reference_impl.net import FaultModel, SimNetwork  # noqa: E402
+from mavconform.reference_impl.session import GcsSession  # noqa: E402
+from mavconform.reference_impl.vehicle import VehicleNode  # noqa: E402
+from mavconform.reference_impl.wire.dialect import mavlink as dialect  # noqa: E402
 
 
 def items(n: int) -> list[MissionItem]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import fnmatch
 
-from reference_impl.errors import UsageError
+from mavconform.reference_impl.errors import UsageError
 
 from .clause import SEED_000, SEED_001, UPSTREAM, Clause, Level, Role
 

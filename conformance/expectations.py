@@ -26,7 +26,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from reference_impl.errors import UsageError
+from mavconform.reference_impl.errors import UsageError
 
 from .catalogue import BY_ID
 

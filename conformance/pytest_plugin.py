@@ -1,4 +1,4 @@
-"""The conformance suite as pytest tests: `pytest --pyargs conformance --mavlink-target URI`.
+"""The conformance suite as pytest tests: `pytest --pyargs mavconform.conformance --mavlink-target URI`.
 
 Registered as a pytest11 entry point, so it loads in every pytest run of an environment
 where mavconform is installed; it only adds options until `--mavlink-target` is given, and
@@ -36,7 +36,7 @@ def pytest_configure(config: pytest.Config) -> None:
 
 def _prepared(config: pytest.Config):
     if "prepared" not in _STATE:
-        from reference_impl.errors import UsageError
+        from mavconform.reference_impl.errors import UsageError
 
         from . import document, suite
         options = document.RunOptions(
@@ -80,8 +80,8 @@ def mavlink_session(request: pytest.FixtureRequest):
     from .outcome import TargetUnresponsive
     from .runner import _restore, _snapshot
     from .session import Session
-    from reference_impl.net.capture import McapCapture
-    from reference_impl.errors import UsageError
+    from mavconform.reference_impl.net.capture import McapCapture
+    from mavconform.reference_impl.errors import UsageError
     p = _prepared(request.config)
     capture = McapCapture(p.report_dir / "run.mcap") if p.report_dir is not None else None
     try:
@@ -120,7 +120,7 @@ def mavlink_session(request: pytest.FixtureRequest):
 def _write(p, session, results, restore, started, capture) -> None:
     import datetime as dt
 
-    from reports.write import write_reports
+    from mavconform.reports.write import write_reports
 
     from . import document, gating
     from .runner import RunOutcome

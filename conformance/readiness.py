@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import CommandResult, MissionResult
-from reference_impl.mission.items import MissionType
-from reference_impl.wire.dialect import mavlink as _d
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import CommandResult, MissionResult
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 from .harness import plans, procedures
 from .harness.match import msg

@@ -16,9 +16,9 @@ import traceback
 from dataclasses import dataclass, field
 from typing import Callable, Iterable
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
 
 from . import readiness
 from .checks import CHECKS

@@ -13,13 +13,13 @@ import time
 
 from typing import Any, Callable
 
-from reference_impl.mission.messages import is_vehicle_heartbeat
-from reference_impl.net.guard import GuardedNode
-from reference_impl.net.shared_link import SharedLink
-from reference_impl.net.sim import CaptureHook, SimNetwork
-from reference_impl.net.udp import UdpDriver
-from reference_impl.net.uri import local_bind_for
-from reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.reference_impl.mission.messages import is_vehicle_heartbeat
+from mavconform.reference_impl.net.guard import GuardedNode
+from mavconform.reference_impl.net.shared_link import SharedLink
+from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
+from mavconform.reference_impl.net.udp import UdpDriver
+from mavconform.reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.tester import Tester, record_traffic
 from .harness.stored_form import form_for_autopilot, form_of_behaviour
@@ -41,7 +41,7 @@ def build_vehicle(uri: TargetUri, *, wall_clock: Callable[[], float] = time.time
         return MUTANTS[uri.name].build(dataclasses.replace(VehicleConfig(), **config))
     base = VehicleConfig()
     if uri.name != "spec":
-        from reference_impl.profiles import load_profile
+        from mavconform.reference_impl.profiles import load_profile
         base = load_profile(uri.name).config
     return VehicleNode(dataclasses.replace(base, **config), wall_clock=wall_clock)
 

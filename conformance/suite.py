@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from reference_impl.errors import UsageError
-from reference_impl.net.capture import McapCapture
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net.capture import McapCapture
 
 from . import catalogue, document, expectations, gating
 from .clause import Clause
@@ -49,7 +49,7 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
     expected = expectations.load(options.expectations) if options.expectations else {}
     baseline = None
     if options.baseline:
-        from reports.run_document import load_run
+        from mavconform.reports.run_document import load_run
         baseline = gating.baseline_outcomes(load_run(options.baseline))
     out = None
     if report_dir is not None:
@@ -92,6 +92,6 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
     doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
                          capture=CAPTURE_NAME if capture is not None else None)
     if p.report_dir is not None:
-        from reports.write import write_reports
+        from mavconform.reports.write import write_reports
         write_reports(doc, p.report_dir)
     return doc, run

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from reference_impl.errors import UsageError
-from reference_impl.net.uri import UdpUri, parse_udp_uri
-from reference_impl.profiles import BUILTIN_PROFILES
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net.uri import UdpUri, parse_udp_uri
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES
 
 FORMS = "builtin:spec|px4|ardupilot, mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT"
 

@@ -28,12 +28,12 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any, Callable, Iterator
 
-from reference_impl.errors import UsageError
-from reference_impl.mission.messages import is_vehicle_heartbeat
-from conformance.harness.exchange import MAX_EVENTS, message_fields
-from reference_impl.net.capture import McapCapture
-from reference_impl.net.sim import CaptureRecord
-from reference_impl.wire.codec import FrameDecoder
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.mission.messages import is_vehicle_heartbeat
+from mavconform.conformance.harness.exchange import MAX_EVENTS, message_fields
+from mavconform.reference_impl.net.capture import McapCapture
+from mavconform.reference_impl.net.sim import CaptureRecord
+from mavconform.reference_impl.wire.codec import FrameDecoder
 
 from .case import Case, Violation, save_case
 from .outcomes import DEATH_KINDS, TargetUnresponsive, ToolError, ToolFailure
@@ -55,7 +55,7 @@ def load_mode(name: str) -> ModuleType:
     """The module of a fuzz mode; it offers `search`, `replay` and `INVARIANTS`."""
     if name not in MODES:
         raise UsageError(f"unknown fuzz mode {name!r} (expected {' or '.join(MODES)})")
-    return importlib.import_module(f"fuzz.{name}")
+    return importlib.import_module(f"{__package__}.{name}")
 
 
 @dataclass(frozen=True)
@@ -116,14 +116,14 @@ def run_campaign(options: CampaignOptions,
                  on_progress: Callable[[Progress], None] | None = None) -> CampaignResult:
     """Search, then save what was found. Raises `TargetUnresponsive` (no HEARTBEAT at the
     start) and `ToolError` (an exception of ours, with the case that caused it)."""
-    from conformance.target_uri import parse_target
+    from mavconform.conformance.target_uri import parse_target
 
     uri = parse_target(options.target)   # a bad URI is the user's mistake: say so before searching
     if options.profile is not None:
         if uri.in_process:
             raise UsageError(f"--profile applies to udp:/udpin: targets; {options.target} is held to "
                              "its own profile")
-        from reference_impl.profiles import load_profile
+        from mavconform.reference_impl.profiles import load_profile
         load_profile(options.profile)    # a bad name or file: say so before searching
     mode = load_mode(options.mode)
     started = dt.datetime.now(dt.timezone.utc)
@@ -219,7 +219,7 @@ def minimise(mode: ModuleType, case: Case, budget: int = MINIMISE_REPLAYS,
     only, where a replay is exact and cheap). Hypothesis shrinks the program it generated;
     this pass also removes steps that stayed only because removing them changed how later
     draws were decoded. One pass from the end, repeated while it removes something."""
-    from conformance.target_uri import parse_target
+    from mavconform.conformance.target_uri import parse_target
 
     if case.violation is None or not parse_target(case.target).in_process:
         return case
@@ -294,7 +294,7 @@ class Restarter:
 
     def restart(self, target: str) -> str | None:
         """None when the target is back; else why not (one line)."""
-        from conformance.target_uri import parse_target
+        from mavconform.conformance.target_uri import parse_target
         from .protocol.connection import TargetConnection
 
         self.runs += 1

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from reference_impl.errors import UsageError
+from mavconform.reference_impl.errors import UsageError
 
 FORMAT = "mavconform-fuzz-case/1"
 MODES = ("protocol", "frames")

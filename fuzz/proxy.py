@@ -32,11 +32,11 @@ from heapq import heappop, heappush
 from itertools import count
 from typing import Any
 
-from reference_impl.net.capture import address_label
-from reference_impl.net.faults import FaultModel, LinkStats
-from reference_impl.net.node import Address
-from reference_impl.net.sim import CaptureHook, CaptureRecord, stable_seed
-from reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.net.capture import address_label
+from mavconform.reference_impl.net.faults import FaultModel, LinkStats
+from mavconform.reference_impl.net.node import Address
+from mavconform.reference_impl.net.sim import CaptureHook, CaptureRecord, stable_seed
+from mavconform.reference_impl.net.uri import local_bind_for
 
 UP, DOWN = "up", "down"          # gcs -> vehicle, vehicle -> gcs
 FRONT = -1                       # the listen port; legs are numbered 0..max_legs-1

@@ -1,6 +1,6 @@
 """Fuzz campaigns as pytest tests, so pytest-xdist spreads them over cores:
 
-    pytest --pyargs fuzz -n auto --fuzz-target builtin:spec --fuzz-shards 8 --fuzz-examples 500
+    pytest --pyargs mavconform.fuzz -n auto --fuzz-target builtin:spec --fuzz-shards 8 --fuzz-examples 500
 
 Registered as a pytest11 entry point; it only adds options until `--fuzz-target` is given.
 Each test is one shard of a campaign: a mode and a shard number, whose seed is derived from
@@ -34,8 +34,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 
 def _settings(config: pytest.Config) -> dict[str, Any]:
-    from fuzz.campaign import MODES, parse_duration
-    from reference_impl.errors import UsageError
+    from mavconform.fuzz.campaign import MODES, parse_duration
+    from mavconform.reference_impl.errors import UsageError
 
     modes = [m.strip() for m in config.getoption("--fuzz-mode").split(",") if m.strip()]
     bad = [m for m in modes if m not in MODES]
@@ -47,7 +47,7 @@ def _settings(config: pytest.Config) -> dict[str, Any]:
         raise pytest.UsageError("--fuzz-shards and --fuzz-examples must be at least 1")
     time_text = config.getoption("--fuzz-time")
     try:
-        from conformance.target_uri import parse_target
+        from mavconform.conformance.target_uri import parse_target
         parse_target(config.getoption("--fuzz-target"))
         time_s = parse_duration(time_text) if time_text else None
         from mavconform.fuzz_cmd import open_database
@@ -75,11 +75,11 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
 
 
 def run_shard(config: pytest.Config, mode: str, shard: int) -> None:
-    from fuzz.campaign import CampaignOptions, run_campaign
-    from fuzz.report import replay_command
+    from mavconform.fuzz.campaign import CampaignOptions, run_campaign
+    from mavconform.fuzz.report import replay_command
     from mavconform.fuzz_cmd import open_database
-    from reference_impl.errors import UsageError
-    from reference_impl.net.sim import stable_seed
+    from mavconform.reference_impl.errors import UsageError
+    from mavconform.reference_impl.net.sim import stable_seed
 
     s = _settings(config)
     seed = stable_seed(config.getoption("--fuzz-seed"), mode, shard) & 0x7FFFFFFF

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from mavconform import __version__
-from reports.run_document import FORMAT, outcome_counts
+from mavconform.reports.run_document import FORMAT, outcome_counts
 
 from .campaign import CampaignResult, Finding
 

@@ -29,14 +29,14 @@ from typing import Any
 
 from hypothesis import strategies as st
 
-from reference_impl.mission.constants import (
+from mavconform.reference_impl.mission.constants import (
     FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
 )
-from reference_impl.mission.items import (
+from mavconform.reference_impl.mission.items import (
     FRAME_MISSION, GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, PLAN_TYPES, MissionItem,
     MissionType,
 )
-from reference_impl.net import FaultModel
+from mavconform.reference_impl.net import FaultModel
 
 # --- valid plans (what the reference vehicle accepts) ------------------------------------
 

@@ -14,8 +14,8 @@ import json
 import sys
 from pathlib import Path
 
-from conformance import catalogue
-from reference_impl.errors import UsageError
+from mavconform.conformance import catalogue
+from mavconform.reference_impl.errors import UsageError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -34,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _coverage(args: argparse.Namespace) -> int:
-    from conformance.spec_coverage import render_markdown
+    from mavconform.conformance.spec_coverage import render_markdown
     if args.clauses or args.level or args.mutants or args.json or args.requirement:
         raise UsageError("--coverage: covers every clause; it takes no other option but --output")
     text = render_markdown()
@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--output: only with --coverage")
     chosen = catalogue.select(args.clauses, args.level)
     if args.mutants:
-        from conformance.mutants import MUTANTS
+        from mavconform.conformance.mutants import MUTANTS
         wanted = {c.id for c in chosen}
         # with no clause filter, also the mutants no clause catches (planted for the fuzzers)
         everything = args.clauses in (None, "*") and not args.level

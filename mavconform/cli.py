@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from reference_impl.errors import LocalProtocolError, UsageError
+from mavconform.reference_impl.errors import LocalProtocolError, UsageError
 
 from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, fuzz_cmd, gcs_cmd, profiles_cmd,
                proxy_cmd, report_cmd, run_cmd, vehicle_cmd)

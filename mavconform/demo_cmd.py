@@ -10,12 +10,12 @@ from __future__ import annotations
 import argparse
 import time
 
-from reference_impl.files import SAMPLES_DIR, load_plan, plan_types_in
-from reference_impl.gcs import GcsNode
-from reference_impl.mission.items import MissionType, renumber
-from reference_impl.net import FaultModel, MonotonicClock, UdpDriver
-from reference_impl.session import GcsSession, TargetUnresponsive
-from reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.files import SAMPLES_DIR, load_plan, plan_types_in
+from mavconform.reference_impl.gcs import GcsNode
+from mavconform.reference_impl.mission.items import MissionType, renumber
+from mavconform.reference_impl.net import FaultModel, MonotonicClock, UdpDriver
+from mavconform.reference_impl.session import GcsSession, TargetUnresponsive
+from mavconform.reference_impl.vehicle import VehicleNode
 
 from .options import capture_to, probability
 

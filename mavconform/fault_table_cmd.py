@@ -11,9 +11,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from reference_impl.errors import UsageError
-from reference_impl.interop import report
-from reference_impl.profiles import BUILTIN_PROFILES, load_profile
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.interop import report
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 
 DESCRIPTION = """\
 The reference GCS against vehicle profiles, in virtual time:

@@ -8,11 +8,11 @@ import time
 from pathlib import Path
 from typing import Any
 
-from fuzz.campaign import (MODES, RESTART_TIMEOUT, CampaignOptions, Progress, load_mode, parse_duration,
+from mavconform.fuzz.campaign import (MODES, RESTART_TIMEOUT, CampaignOptions, Progress, load_mode, parse_duration,
                            replay_recorded, run_campaign)
-from fuzz.case import load_case
-from fuzz.outcomes import TargetUnresponsive, ToolError
-from reference_impl.errors import UsageError
+from mavconform.fuzz.case import load_case
+from mavconform.fuzz.outcomes import TargetUnresponsive, ToolError
+from mavconform.reference_impl.errors import UsageError
 
 from .options import seconds_up_to
 
@@ -59,7 +59,7 @@ examples:
   mavconform fuzz --target udpin:14550 --mode frames --time 5m          # a SITL that sends to us
   mavconform fuzz --target udpin:14550 --time 5m --restart-cmd './restart-sitl.sh'
   mavconform fuzz --replay fuzz-findings/protocol-atomic-upload-1a2b3c4d5e.json
-across cores and machines: pytest --pyargs fuzz -n auto --fuzz-target builtin:spec (README)
+across cores and machines: pytest --pyargs mavconform.fuzz -n auto --fuzz-target builtin:spec (README)
 """
 
 DEFAULT_EXAMPLES = 100
@@ -107,8 +107,8 @@ def run(args: argparse.Namespace) -> int:
         return _replay(args)
     if args.capture:
         raise UsageError("--capture goes with --replay (a campaign saves each finding's capture itself)")
-    from fuzz.report import campaign_document, replay_command
-    from reports.write import write_reports
+    from mavconform.fuzz.report import campaign_document, replay_command
+    from mavconform.reports.write import write_reports
 
     for option, folder in (("--findings", args.findings), ("--report-dir", args.report_dir)):
         _writable(option, folder)   # before the search: a finding must never be lost to a bad path

@@ -7,15 +7,15 @@ import contextlib
 import sys
 from typing import Iterator
 
-from reference_impl.files import Plan, check_writable, load_plan, plan_from_items, plan_types_in, save_plan
-from reference_impl.gcs import GcsConfig, GcsNode
-from reference_impl.mission.adaptations import NAMED
-from reference_impl.mission.items import MissionType
-from reference_impl.mission.results import OperationResult
-from reference_impl.net.uri import local_bind_for
-from reference_impl.mission.timing import Timings
-from reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
-from reference_impl.session import GcsSession, TargetUnresponsive
+from mavconform.reference_impl.files import Plan, check_writable, load_plan, plan_from_items, plan_types_in, save_plan
+from mavconform.reference_impl.gcs import GcsConfig, GcsNode
+from mavconform.reference_impl.mission.adaptations import NAMED
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission.results import OperationResult
+from mavconform.reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.mission.timing import Timings
+from mavconform.reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
+from mavconform.reference_impl.session import GcsSession, TargetUnresponsive
 
 from .options import capture_to, mavlink_id, seconds_up_to, seq_number, time_scale
 

@@ -11,7 +11,7 @@ import contextlib
 import signal
 from typing import Any, Callable, Iterator
 
-from reference_impl.net import FaultModel, McapCapture, parse_drop_rule
+from mavconform.reference_impl.net import FaultModel, McapCapture, parse_drop_rule
 
 
 def _number(text: str) -> float:

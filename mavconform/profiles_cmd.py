@@ -13,7 +13,7 @@ import argparse
 import json
 from typing import Any
 
-from reference_impl.profiles import BUILTIN_PROFILES, KNOBS, Profile, load_profile
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, KNOBS, Profile, load_profile
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

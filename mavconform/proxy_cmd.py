@@ -7,9 +7,9 @@ import ipaddress
 import socket
 import sys
 
-from fuzz.proxy import DOWN, MAX_LEGS, UP, ChaosProxy, UdpProxy
-from reference_impl.errors import UsageError
-from reference_impl.net import LinkStats, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
+from mavconform.fuzz.proxy import DOWN, MAX_LEGS, UP, ChaosProxy, UdpProxy
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net import LinkStats, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
 
 from .options import add_fault_options, capture_to, describe_faults, fault_model, positive, sigterm_as_interrupt
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from reference_impl.errors import UsageError
+from mavconform.reference_impl.errors import UsageError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -43,7 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def render(args: argparse.Namespace) -> int:
-    from reports import html_report, junit_xml, load_run, markdown_summary, write_reports
+    from mavconform.reports import html_report, junit_xml, load_run, markdown_summary, write_reports
     doc = load_run(args.run_json)
     singles = [(args.html, html_report), (args.junit, junit_xml), (args.markdown, markdown_summary)]
     if not any(path for path, _ in singles) or args.dir:
@@ -67,8 +67,8 @@ UNCONFIRMED = "unconfirmed: read this failure against the autopilot's source bef
 def draft_expectations(args: argparse.Namespace) -> int:
     import json
 
-    from conformance import expectations
-    from reports import load_run
+    from mavconform.conformance import expectations
+    from mavconform.reports import load_run
     doc = load_run(args.run_json)
     base = expectations.load(args.base) if args.base else {}
     seen_on = args.seen_on.strip() or f"{doc['run']['target']}, {doc['run']['started'][:10]}"

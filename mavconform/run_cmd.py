@@ -17,10 +17,10 @@ import sys
 import textwrap
 from typing import Any
 
-from conformance import document, suite
-from conformance.clause import Clause
-from conformance.outcome import ClauseResult, Outcome
-from conformance.target_uri import FORMS
+from mavconform.conformance import document, suite
+from mavconform.conformance.clause import Clause
+from mavconform.conformance.outcome import ClauseResult, Outcome
+from mavconform.conformance.target_uri import FORMS
 
 from .options import time_scale
 

@@ -7,11 +7,11 @@ import dataclasses
 import sys
 from typing import Any
 
-from reference_impl.errors import UsageError
-from reference_impl.mission.items import MissionType
-from reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
-from reference_impl.profiles import BUILTIN_PROFILES, load_profile
-from reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
+from mavconform.reference_impl.vehicle import VehicleNode
 
 from .options import (add_fault_options, capture_to, describe_faults, fault_model, mavlink_id, positive,
                       seq_number, sigterm_as_interrupt)
@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _mutant(name: str, config: Any, profile: str) -> VehicleNode:
-    from conformance.mutants import MUTANTS
+    from mavconform.conformance.mutants import MUTANTS
     if profile != "spec":
         raise UsageError("--mutant and --profile: a mutant is the spec vehicle with one bug")
     if name not in MUTANTS:

@@ -5,11 +5,11 @@
 recorded by the runner during the run and only linked from here.
 """
 
-from reports.html import html_report
-from reports.junit import junit_xml
-from reports.markdown import markdown_summary
-from reports.run_document import FORMAT, OUTCOMES, check_run, dump_run, load_run
-from reports.write import write_reports
+from mavconform.reports.html import html_report
+from mavconform.reports.junit import junit_xml
+from mavconform.reports.markdown import markdown_summary
+from mavconform.reports.run_document import FORMAT, OUTCOMES, check_run, dump_run, load_run
+from mavconform.reports.write import write_reports
 
 __all__ = ["FORMAT", "OUTCOMES", "check_run", "dump_run", "html_report", "junit_xml", "load_run",
            "markdown_summary", "write_reports"]

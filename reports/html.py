@@ -13,9 +13,9 @@ from html import escape
 from typing import Any
 from urllib.parse import quote
 
-from reports.run_document import PASS, outcome_counts
-from reports.sequence_svg import sequence_diagram
-from reports.text import clean, one_line, run_facts
+from mavconform.reports.run_document import PASS, outcome_counts
+from mavconform.reports.sequence_svg import sequence_diagram
+from mavconform.reports.text import clean, one_line, run_facts
 
 OUTCOME_COLOURS = {"pass": "#1a7f37", "fail": "#cf222e", "known-deviation": "#9a6700",
                    "not-applicable": "#6e7781", "skipped": "#57606a", "error": "#8250df"}

@@ -11,10 +11,10 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from typing import Any
 
-from reports.run_document import (
+from mavconform.reports.run_document import (
     ERROR, FAIL, KNOWN_DEVIATION, NOT_APPLICABLE, SKIPPED, outcome_counts,
 )
-from reports.text import clean, exchange_lines, one_line, value_text
+from mavconform.reports.text import clean, exchange_lines, one_line, value_text
 
 SUITE_NAME = "mavconform"
 MESSAGE_LIMIT = 500  # characters in a message attribute (CI tools show it as a headline)

@@ -11,8 +11,8 @@ import re
 from typing import Any
 from urllib.parse import quote
 
-from reports.run_document import OUTCOMES, PASS, outcome_counts
-from reports.text import document_identity, one_line, seconds
+from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
+from mavconform.reports.text import document_identity, one_line, seconds
 
 DETAIL_LIMIT = 200  # characters of detail per table cell
 

@@ -30,7 +30,7 @@ import re
 from pathlib import Path
 from typing import Any, NoReturn
 
-from reference_impl.errors import UsageError
+from mavconform.reference_impl.errors import UsageError
 
 FORMAT = "mavconform-run/1"
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 from html import escape
 from typing import Any
 
-from reports.run_document import NOTE, TX
-from reports.text import event_label, exchange_start, one_line, relative_time
+from mavconform.reports.run_document import NOTE, TX
+from mavconform.reports.text import event_label, exchange_start, one_line, relative_time
 
 MAX_EVENTS = 300  # drawn per diagram; the rest is summed up in a final note
 

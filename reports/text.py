@@ -12,7 +12,7 @@ import json
 import re
 from typing import Any
 
-from reports.run_document import NOTE, RX, TX
+from mavconform.reports.run_document import NOTE, RX, TX
 
 # C0 controls but tab and newline, DEL, C1 controls, bidi embeddings/overrides/isolates,
 # noncharacters U+FFFE/U+FFFF; lone surrogates are replaced rather than dropped.

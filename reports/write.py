@@ -10,11 +10,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, NoReturn
 
-from reference_impl.errors import UsageError
-from reports.html import html_report
-from reports.junit import junit_xml
-from reports.markdown import markdown_summary
-from reports.run_document import check_run, dump_run
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reports.html import html_report
+from mavconform.reports.junit import junit_xml
+from mavconform.reports.markdown import markdown_summary
+from mavconform.reports.run_document import check_run, dump_run
 
 SUFFIXES = {"json": ".json", "junit": ".junit.xml", "markdown": ".md", "html": ".html"}
 

@@ -4,7 +4,7 @@ They live in `fuzz.strategies` (the fuzzer draws from the same ones); this modul
 the names the tests import.
 """
 
-from fuzz.strategies import (
+from mavconform.fuzz.strategies import (
     GLOBAL, alt, f32, fault_models, lat, lon, mission_item, partition, plan_items,
 )
 

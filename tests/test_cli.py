@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from mavconform.cli import main
-from reference_impl.files import SAMPLES_DIR, load_plan
+from mavconform.reference_impl.files import SAMPLES_DIR, load_plan
 
 from .vehicle_process import vehicle_process
 

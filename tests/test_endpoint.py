@@ -1,8 +1,8 @@
 """The node-side endpoint: who counts as a peer, and the bounds on what it remembers."""
 
-from reference_impl.endpoint import MAX_ADDRESSES, MavlinkEndpoint
-from reference_impl.wire import FrameEncoder
-from reference_impl.wire.dialect import mavlink as d
+from mavconform.reference_impl.endpoint import MAX_ADDRESSES, MavlinkEndpoint
+from mavconform.reference_impl.wire import FrameEncoder
+from mavconform.reference_impl.wire.dialect import mavlink as d
 
 
 def heartbeat(sysid: int) -> bytes:

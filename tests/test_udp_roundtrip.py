@@ -6,12 +6,12 @@ import dataclasses
 
 import pytest
 
-from reference_impl.files import SAMPLES_DIR, load_plan
-from reference_impl.gcs import GcsNode
-from reference_impl.mission.items import PLAN_TYPES, MissionType, renumber
-from reference_impl.net import FaultModel, MonotonicClock, UdpDriver
-from reference_impl.session import GcsSession, TargetUnresponsive
-from reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.files import SAMPLES_DIR, load_plan
+from mavconform.reference_impl.gcs import GcsNode
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType, renumber
+from mavconform.reference_impl.net import FaultModel, MonotonicClock, UdpDriver
+from mavconform.reference_impl.session import GcsSession, TargetUnresponsive
+from mavconform.reference_impl.vehicle import VehicleNode
 
 pytestmark = pytest.mark.udp
 

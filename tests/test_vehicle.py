@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import pytest
 
-from reference_impl.flight import haversine_m
-from reference_impl.gcs import GcsNode
-from reference_impl.mission.constants import Cmd, CommandResult, MissionState
-from reference_impl.mission.items import MissionItem, MissionType
-from reference_impl.net import SimNetwork
-from reference_impl.session import GcsSession
-from reference_impl.vehicle import VehicleConfig, VehicleNode
-from reference_impl.wire.dialect import mavlink as d
+from mavconform.reference_impl.flight import haversine_m
+from mavconform.reference_impl.gcs import GcsNode
+from mavconform.reference_impl.mission.constants import Cmd, CommandResult, MissionState
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.net import SimNetwork
+from mavconform.reference_impl.session import GcsSession
+from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.reference_impl.wire.dialect import mavlink as d
 
 HOME = (47.397742, 8.545594)
 

@@ -3,9 +3,9 @@ MAV_CMD_DO_SET_MISSION_CURRENT): MIS.CUR.*"""
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import Cmd, CommandResult, MissionResult
-from reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import Cmd, CommandResult, MissionResult
+from mavconform.reference_impl.mission.items import MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import msg

@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import MissionItem, MissionType, xy_scale
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import MissionItem, MissionType, xy_scale
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, ack, item, msg

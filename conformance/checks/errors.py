@@ -6,9 +6,9 @@ the operation and leaves the vehicle idle, with its plan unaltered.
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, REQUESTS, ack, msg

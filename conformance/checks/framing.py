@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import ipaddress
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
-from reference_impl.wire.frame import Frame
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
+from mavconform.reference_impl.wire.frame import Frame
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, REQUESTS, ack, msg
@@ -223,7 +223,7 @@ FILLER = bytes([0x55]) * 280
 def _damaged_frames(t: Tester) -> list[tuple[str, bytes]]:
     """MISSION_CLEAR_ALL and MISSION_COUNT 0 (each would empty the plan if acted on), each
     once with a bad checksum and once cut off before its checksum; properly addressed."""
-    from fuzz.frames.mutators import MutationContext, bad_crc, truncate   # the frame fuzzer's faults
+    from mavconform.fuzz.frames.mutators import MutationContext, bad_crc, truncate   # the frame fuzzer's faults
 
     ctx = MutationContext(key=b"", wrong_key=b"", wall_clock=time.time)   # neither fault signs
     out = []

@@ -8,9 +8,9 @@ vehicle does not support ids (both clauses are MAYs), unless the plan is empty.
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import msg

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from reference_impl.mission.constants import MissionState
-from reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission.constants import MissionState
+from mavconform.reference_impl.mission.items import MissionType
 
 from ..harness import flight as flying
 from ..harness import procedures

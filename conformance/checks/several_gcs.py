@@ -8,9 +8,9 @@ neither join nor end it. A message addressed to another system is not ours to ac
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import ack, request

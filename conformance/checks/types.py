@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, REQUESTS, ack, msg, request

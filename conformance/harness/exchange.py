@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from reference_impl.net.capture import json_safe
+from mavconform.reference_impl.net.capture import json_safe
 
 MAX_EVENTS = 400
 KEPT_NAMES = frozenset({"STATUSTEXT", "COMMAND_ACK", "COMMAND_LONG"})

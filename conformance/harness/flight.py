@@ -23,9 +23,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import Cmd, CommandResult
-from reference_impl.mission.items import MissionItem
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import Cmd, CommandResult
+from mavconform.reference_impl.mission.items import MissionItem
 
 from ..outcome import NotApplicable, PreconditionFailed
 from . import plans, procedures

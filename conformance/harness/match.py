@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Iterable
 
-from reference_impl.wire.frame import Frame
+from mavconform.reference_impl.wire.frame import Frame
 
 REQUESTS = ("MISSION_REQUEST_INT", "MISSION_REQUEST")
 ITEMS = ("MISSION_ITEM_INT", "MISSION_ITEM")

@@ -7,8 +7,8 @@ from every other (`variant`), so "the stored plan is still the old one" is never
 
 from __future__ import annotations
 
-from reference_impl.mission.constants import Cmd
-from reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission.constants import Cmd
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 FRAME_GLOBAL_RELATIVE_ALT = 3      # MAV_FRAME_GLOBAL_RELATIVE_ALT: x/y degE7 in the INT form
 STEP = 40                          # degE7 between waypoints: about half a metre

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import CommandResult, MissionResult
-from reference_impl.mission.items import MissionItem, MissionType
-from reference_impl.wire.frame import Frame
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import CommandResult, MissionResult
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.wire.frame import Frame
 
 from ..outcome import ClauseFailed, PreconditionFailed
 from .match import Match, ack, msg, request

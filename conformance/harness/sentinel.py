@@ -8,7 +8,7 @@ whatever the MAVLink version. A target that never acknowledges it gets the reply
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
+from mavconform.reference_impl.mission import messages as m
 
 from .match import msg
 from .tester import Tester

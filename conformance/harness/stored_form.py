@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
-from reference_impl.mission.items import GLOBAL_FRAMES, PLAIN_FRAME, MissionItem, MissionType
-from reference_impl.mission.store import STORAGE_FORMS
+from mavconform.reference_impl.mission.items import GLOBAL_FRAMES, PLAIN_FRAME, MissionItem, MissionType
+from mavconform.reference_impl.mission.store import STORAGE_FORMS
 
 MAX_LISTED = 8          # differences listed in one verdict; the rest are counted
 _FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z",
@@ -135,7 +135,7 @@ def form_for_autopilot(autopilot: int | None) -> StoredForm:
     name = profile_for_autopilot(autopilot)
     if name is None:
         return SPEC_FORM
-    from reference_impl.profiles import load_profile
+    from mavconform.reference_impl.profiles import load_profile
     return form_of_behaviour(load_profile(name).behaviour,
                              f"HEARTBEAT autopilot {autopilot}: the {name} profile")
 

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from typing import Any, Callable, Protocol
 
-from reference_impl.mission.timing import Timings
-from reference_impl.wire.frame import Frame
+from mavconform.reference_impl.mission.timing import Timings
+from mavconform.reference_impl.wire.frame import Frame
 
 from ..outcome import ClauseFailed, TargetUnresponsive
 from .exchange import Exchange, message_fields, relevant

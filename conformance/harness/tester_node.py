@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from reference_impl.endpoint import MavlinkEndpoint
-from reference_impl.net.node import Address
-from reference_impl.mission import messages as m
-from reference_impl.wire.frame import Frame
+from mavconform.reference_impl.endpoint import MavlinkEndpoint
+from mavconform.reference_impl.net.node import Address
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.wire.frame import Frame
 
 
 

@@ -13,9 +13,9 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from reference_impl.mission.behaviour import ServerBehaviour
-from reference_impl.mission.server import MissionServer
-from reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.reference_impl.mission.behaviour import ServerBehaviour
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 
 @dataclass(frozen=True)

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.actions import Send
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.server import MissionServer
-from reference_impl.mission.transitions import SlotState
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.actions import Send
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.mission.transitions import SlotState
 
 from . import mutant, server_mutant
 

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.actions import Send
-from reference_impl.mission.constants import Cmd, CommandResult
-from reference_impl.mission.items import MissionType
-from reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.actions import Send
+from mavconform.reference_impl.mission.constants import Cmd, CommandResult
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission.server import MissionServer
 
 from . import knob_mutant, mutant, server_mutant
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import struct
 
-from reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.vehicle import VehicleNode
 
 from . import mutant, vehicle_mutant
 

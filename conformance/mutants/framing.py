@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from reference_impl.mission.items import MissionType
-from reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.vehicle import VehicleNode
 
 from . import mutant, vehicle_mutant
 
@@ -74,7 +74,7 @@ class _IgnoresChecksum(VehicleNode):
 
     def datagram_received(self, data, source, now):
         if len(data) > 10 and data[0] == _MAGIC_V2 and not data[2] & 1 and len(data) == data[1] + _V2_OVERHEAD:
-            from fuzz.frames import wire
+            from mavconform.fuzz.frames import wire
             data = wire.rechecksum(data)
         super().datagram_received(data, source, now)
 
@@ -84,7 +84,7 @@ class _PadsTruncatedFrames(VehicleNode):
 
     def datagram_received(self, data, source, now):
         if len(data) > 10 and data[0] == _MAGIC_V2 and not data[2] & 1 and len(data) < data[1] + _V2_OVERHEAD:
-            from fuzz.frames import wire
+            from mavconform.fuzz.frames import wire
             data = wire.rechecksum(data.ljust(data[1] + _V2_OVERHEAD, b"\0"))
         super().datagram_received(data, source, now)
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from reference_impl.mission.server import MissionServer
-from reference_impl.mission.store import MissionStore
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.mission.store import MissionStore
 
 from . import mutant, server_mutant
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from reference_impl.mission.progress import MissionProgress
-from reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.mission.progress import MissionProgress
+from mavconform.reference_impl.mission.server import MissionServer
 
 from . import mutant, server_mutant
 

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.server import MissionServer
-from reference_impl.mission.timing import Timings
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.mission.timing import Timings
 
 from . import knob_mutant, mutant, server_mutant
 

@@ -67,9 +67,9 @@ from bisect import bisect_right
 from collections import deque
 from typing import Callable, Iterable
 
-from reference_impl.wire.codec import FrameDecoder
-from reference_impl.wire.frame import Frame, SignatureVerdict
-from reference_impl.wire.signing import SigningKey
+from mavconform.reference_impl.wire.codec import FrameDecoder
+from mavconform.reference_impl.wire.frame import Frame, SignatureVerdict
+from mavconform.reference_impl.wire.signing import SigningKey
 
 from . import wire
 from .cparser import OK, PARSE_CHAR, VARIANTS, CParser, MessageTable, ParsedFrame

@@ -83,11 +83,11 @@ import hashlib
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, NamedTuple
 
-from reference_impl.wire.codec import IFLAG_SIGNED
-from reference_impl.wire.codec import MAGIC_V1 as STX_V1      # MAVLINK_STX_MAVLINK1
-from reference_impl.wire.codec import MAGIC_V2 as STX_V2      # MAVLINK_STX
-from reference_impl.wire.codec import SIGNATURE_LEN as SIGNATURE_BLOCK_LEN
-from reference_impl.wire.signing import signing_timestamp
+from mavconform.reference_impl.wire.codec import IFLAG_SIGNED
+from mavconform.reference_impl.wire.codec import MAGIC_V1 as STX_V1      # MAVLINK_STX_MAVLINK1
+from mavconform.reference_impl.wire.codec import MAGIC_V2 as STX_V2      # MAVLINK_STX
+from mavconform.reference_impl.wire.codec import SIGNATURE_LEN as SIGNATURE_BLOCK_LEN
+from mavconform.reference_impl.wire.signing import signing_timestamp
 
 from .wire import _DIALECT, crc16
 

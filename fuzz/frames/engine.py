@@ -21,11 +21,11 @@ from hypothesis import HealthCheck, Phase, Verbosity, given, settings
 from hypothesis import strategies as st
 from hypothesis.errors import HypothesisException
 
-from conformance.target_uri import TargetUri, parse_target
-from fuzz.case import Case, Violation
-from fuzz.outcomes import TargetUnresponsive, ToolError, ToolFailure
-from reference_impl.errors import UsageError
-from reference_impl.net.sim import CaptureHook, stable_seed
+from mavconform.conformance.target_uri import TargetUri, parse_target
+from mavconform.fuzz.case import Case, Violation
+from mavconform.fuzz.outcomes import TargetUnresponsive, ToolError, ToolFailure
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
 from .program import FrameSpec, programs
 from .rig import Rig

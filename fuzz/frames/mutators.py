@@ -14,8 +14,8 @@ import random
 from dataclasses import dataclass, field
 from typing import Callable
 
-from reference_impl.wire.codec import IFLAG_SIGNED, MAGIC_V1, MAGIC_V2
-from reference_impl.wire.signing import signing_timestamp
+from mavconform.reference_impl.wire.codec import IFLAG_SIGNED, MAGIC_V1, MAGIC_V2
+from mavconform.reference_impl.wire.signing import signing_timestamp
 
 from . import wire
 

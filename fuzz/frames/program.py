@@ -21,7 +21,7 @@ from typing import Any
 
 from hypothesis import strategies as st
 
-from reference_impl.wire.codec import FrameEncoder
+from mavconform.reference_impl.wire.codec import FrameEncoder
 
 from . import wire
 from .admission import Admission

@@ -38,24 +38,24 @@ from __future__ import annotations
 import hashlib
 from typing import Any
 
-from conformance.harness import plans
-from conformance.harness.stored_form import (SPEC_FORM, StoredForm, describe_differences,
+from mavconform.conformance.harness import plans
+from mavconform.conformance.harness.stored_form import (SPEC_FORM, StoredForm, describe_differences,
                                              form_for_autopilot, form_of_behaviour)
-from conformance.session import build_vehicle
-from conformance.target_uri import TargetUri
-from fuzz.case import Violation
-from reference_impl.errors import LocalProtocolError
-from reference_impl.gcs import GcsConfig, GcsNode
-from reference_impl.mission.items import PLAN_TYPES, MissionType
-from reference_impl.net.clock import MonotonicClock, SimClock
-from reference_impl.net.guard import GuardedNode
-from reference_impl.net.node import Address
-from reference_impl.net.sim import CaptureHook, SimNetwork
-from reference_impl.net.udp import UdpDriver
-from reference_impl.net.uri import local_bind_for
-from reference_impl.session import GcsSession
-from reference_impl.vehicle import VehicleNode
-from reference_impl.wire.signing import SigningKey
+from mavconform.conformance.session import build_vehicle
+from mavconform.conformance.target_uri import TargetUri
+from mavconform.fuzz.case import Violation
+from mavconform.reference_impl.errors import LocalProtocolError
+from mavconform.reference_impl.gcs import GcsConfig, GcsNode
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType
+from mavconform.reference_impl.net.clock import MonotonicClock, SimClock
+from mavconform.reference_impl.net.guard import GuardedNode
+from mavconform.reference_impl.net.node import Address
+from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
+from mavconform.reference_impl.net.udp import UdpDriver
+from mavconform.reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.session import GcsSession
+from mavconform.reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.wire.signing import SigningKey
 
 from .admission import Admission
 from .mutators import MutationContext
@@ -251,7 +251,7 @@ class Rig:
         if self.vehicle is not None:
             self.form = form_of_behaviour(self.vehicle.config.behaviour, str(self.uri))
         elif self.profile is not None:
-            from reference_impl.profiles import load_profile
+            from mavconform.reference_impl.profiles import load_profile
             self.form = form_of_behaviour(load_profile(self.profile).behaviour,
                                           f"profile {self.profile} (--profile)")
         else:

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import Cmd
-from reference_impl.mission.items import MissionItem, MissionType
-from reference_impl.wire.dialect import mavlink as _d
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import Cmd
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 Target = tuple[int, int]
 Template = tuple[str, Callable[[Target], Any]]

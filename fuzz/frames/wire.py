@@ -18,7 +18,7 @@ import hashlib
 import struct
 from typing import Any
 
-from reference_impl.wire.codec import (IFLAG_SIGNED, MAGIC_V1, MAGIC_V2, SIGNATURE_LEN,
+from mavconform.reference_impl.wire.codec import (IFLAG_SIGNED, MAGIC_V1, MAGIC_V2, SIGNATURE_LEN,
                                        base_payload_length, default_dialect)
 
 _DIALECT = default_dialect()

@@ -17,14 +17,14 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from conformance.target_uri import TargetUri
-from reference_impl.endpoint import MavlinkEndpoint
-from reference_impl.mission.messages import HEARTBEAT_PERIOD, gcs_heartbeat_message, is_vehicle_heartbeat
-from reference_impl.net import FaultModel, UdpDriver
-from reference_impl.net.node import Address
-from reference_impl.net.shared_link import SharedLink
-from reference_impl.net.sim import CaptureHook
-from reference_impl.net.uri import local_bind_for
+from mavconform.conformance.target_uri import TargetUri
+from mavconform.reference_impl.endpoint import MavlinkEndpoint
+from mavconform.reference_impl.mission.messages import HEARTBEAT_PERIOD, gcs_heartbeat_message, is_vehicle_heartbeat
+from mavconform.reference_impl.net import FaultModel, UdpDriver
+from mavconform.reference_impl.net.node import Address
+from mavconform.reference_impl.net.shared_link import SharedLink
+from mavconform.reference_impl.net.sim import CaptureHook
+from mavconform.reference_impl.net.uri import local_bind_for
 
 from ..outcomes import TargetUnresponsive
 from .faults import install

@@ -13,7 +13,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-from reference_impl.net import DropMessage, FaultModel, MessageRule
+from mavconform.reference_impl.net import DropMessage, FaultModel, MessageRule
 
 _DIRECT = ("loss", "duplicate", "reorder", "reorder_delay", "delay", "jitter", "corrupt")
 

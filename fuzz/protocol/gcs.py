@@ -19,14 +19,14 @@ import copy
 import time
 from typing import Any, Callable, Sequence
 
-from reference_impl.endpoint import MavlinkEndpoint
-from reference_impl.mission import messages as m
-from reference_impl.mission.actions import Finished, Peer, Send
-from reference_impl.mission.client import MissionClient
-from reference_impl.mission.items import MissionItem, MissionType
-from reference_impl.mission.results import OperationResult
-from reference_impl.mission.timing import Timings
-from reference_impl.net.node import Address
+from mavconform.reference_impl.endpoint import MavlinkEndpoint
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.actions import Finished, Peer, Send
+from mavconform.reference_impl.mission.client import MissionClient
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission.results import OperationResult
+from mavconform.reference_impl.mission.timing import Timings
+from mavconform.reference_impl.net.node import Address
 
 _ITEMS = ("MISSION_ITEM_INT", "MISSION_ITEM")
 # Rewrite keys that stand for MISSION_ITEM's float x/y (and mean nothing for MISSION_ITEM_INT).

@@ -24,7 +24,7 @@ from typing import Any, Callable
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, rule
 
-from fuzz import strategies as fs
+from mavconform.fuzz import strategies as fs
 
 from ..case import Violation
 from ..outcomes import DEATH_KINDS, ToolFailure

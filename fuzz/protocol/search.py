@@ -26,9 +26,9 @@ from hypothesis import HealthCheck, Phase, Verbosity, settings
 from hypothesis.database import ExampleDatabase
 from hypothesis.stateful import get_state_machine_test
 
-from conformance.target_uri import parse_target
-from reference_impl.errors import UsageError
-from reference_impl.net.sim import CaptureHook, stable_seed
+from mavconform.conformance.target_uri import parse_target
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
 from ..case import Case, Violation
 from ..outcomes import ToolError

@@ -29,14 +29,14 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from conformance.harness.stored_form import describe_differences
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
-from reference_impl.mission.results import OperationResult
-from reference_impl.mission.transitions import SlotState
-from reference_impl.net.sim import CaptureHook
-from reference_impl.wire.dialect import mavlink as _d
+from mavconform.conformance.harness.stored_form import describe_differences
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
+from mavconform.reference_impl.mission.results import OperationResult
+from mavconform.reference_impl.mission.transitions import SlotState
+from mavconform.reference_impl.net.sim import CaptureHook
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 from ..case import Violation
 from .faults import build_fault_model
@@ -495,7 +495,7 @@ def float_variant(plan: Plan, rewrite: dict[int, dict[str, Any]] | None = None, 
     truncates toward zero (ArduPilot, GCS_Common.cpp `convert_MISSION_ITEM_to_MISSION_ITEM_INT`:
     `x = packet.x * 1.0e7f`): seen on ArduCopter SITL, a rally point sent as x = -1940
     degE7 by MISSION_ITEM came back as -1939."""
-    from reference_impl.mission.items import to_float32, xy_scale
+    from mavconform.reference_impl.mission.items import to_float32, xy_scale
     out = []
     for it in plan:
         fx, fy = it.float_xy()

@@ -23,8 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable, Sequence
 
-from conformance.harness.stored_form import SPEC_FORM, StoredForm
-from reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
+from mavconform.conformance.harness.stored_form import SPEC_FORM, StoredForm
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
 
 Plan = tuple[MissionItem, ...]
 
@@ -105,5 +105,5 @@ def describe_plan(plan: Sequence[MissionItem]) -> str:
 
 
 def _digest(plan: Plan) -> str:
-    from reference_impl.mission.store import plan_digest
+    from mavconform.reference_impl.mission.store import plan_digest
     return f"0x{plan_digest(plan):08x}"

@@ -31,15 +31,15 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
-from conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, profile_for_autopilot
-from conformance.session import build_vehicle
-from conformance.target_uri import TargetUri, parse_target
-from reference_impl.mission.items import MissionType
-from reference_impl.mission.timing import Timings
-from reference_impl.net import FaultModel, SimNetwork
-from reference_impl.net.guard import GuardedNode
-from reference_impl.net.sim import CaptureHook
-from reference_impl.vehicle import VehicleNode
+from mavconform.conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, profile_for_autopilot
+from mavconform.conformance.session import build_vehicle
+from mavconform.conformance.target_uri import TargetUri, parse_target
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission.timing import Timings
+from mavconform.reference_impl.net import FaultModel, SimNetwork
+from mavconform.reference_impl.net.guard import GuardedNode
+from mavconform.reference_impl.net.sim import CaptureHook
+from mavconform.reference_impl.vehicle import VehicleNode
 
 from .connection import TargetConnection
 from .faults import install
@@ -72,7 +72,7 @@ def rules_of(behaviour: Any, basis: str) -> Profile:
 
 def profile_from(name_or_file: str, basis: str) -> Profile:
     """The oracle rules of a vehicle profile (builtin name or TOML file)."""
-    from reference_impl.profiles import load_profile
+    from mavconform.reference_impl.profiles import load_profile
     return rules_of(load_profile(name_or_file).behaviour, basis)
 
 

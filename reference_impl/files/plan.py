@@ -13,8 +13,8 @@ from dataclasses import dataclass, field, replace
 from decimal import ROUND_HALF_EVEN, Decimal, InvalidOperation
 from typing import Iterable
 
-from reference_impl.errors import UsageError
-from reference_impl.mission.items import (
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.mission.items import (
     INT32_MAX, INT32_MIN, MissionItem, MissionType, renumber, to_float32, xy_scale,
 )
 

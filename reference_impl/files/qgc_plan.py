@@ -16,12 +16,12 @@ import math
 from decimal import Decimal
 from typing import Any, NoReturn
 
-from reference_impl.files.plan import (
+from mavconform.reference_impl.files.plan import (
     Plan, PlanFileError, float32_from_decimal, float32_text, plan_from_items, xy_decimals,
     xy_from_decimal, xy_to_decimal,
 )
-from reference_impl.mission.constants import Cmd
-from reference_impl.mission.items import GLOBAL_FRAMES, MissionItem, MissionType
+from mavconform.reference_impl.mission.constants import Cmd
+from mavconform.reference_impl.mission.items import GLOBAL_FRAMES, MissionItem, MissionType
 
 FILE_VERSION = 1
 MISSION_VERSION = 2

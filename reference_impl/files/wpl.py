@@ -14,11 +14,11 @@ import re
 from decimal import Decimal
 from typing import NoReturn
 
-from reference_impl.files.plan import (
+from mavconform.reference_impl.files.plan import (
     Plan, PlanFileError, float32_from_decimal, float32_text, parse_decimal, xy_from_decimal,
     xy_text,
 )
-from reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 HEADER = "QGC WPL 110"
 COLUMNS = ("INDEX", "CURRENT", "FRAME", "COMMAND", "PARAM1", "PARAM2", "PARAM3", "PARAM4",

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from conformance import catalogue
-from conformance.checks import CHECKS
-from conformance.clause import Clause, Level, Role
-from reference_impl.errors import UsageError
+from mavconform.conformance import catalogue
+from mavconform.conformance.checks import CHECKS
+from mavconform.conformance.clause import Clause, Level, Role
+from mavconform.reference_impl.errors import UsageError
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.catalogue import CLAUSES
-from conformance.mutants import MUTANTS
-from conformance.outcome import Outcome
-from conformance.runner import run_clauses
-from conformance.session import Session
-from conformance.target_uri import parse_target
+from mavconform.conformance.catalogue import CLAUSES
+from mavconform.conformance.mutants import MUTANTS
+from mavconform.conformance.outcome import Outcome
+from mavconform.conformance.runner import run_clauses
+from mavconform.conformance.session import Session
+from mavconform.conformance.target_uri import parse_target
 
 
 def _run(uri: str) -> dict[str, object]:

@@ -9,11 +9,11 @@ import sys
 
 import pytest
 
-from conformance import expectations
-from conformance.gating import apply_expectations, gate
-from conformance.outcome import ClauseResult, Outcome
+from mavconform.conformance import expectations
+from mavconform.conformance.gating import apply_expectations, gate
+from mavconform.conformance.outcome import ClauseResult, Outcome
 from mavconform.cli import main
-from reference_impl.errors import UsageError
+from mavconform.reference_impl.errors import UsageError
 
 pytestmark = pytest.mark.udp
 REPORTS = {"run.json", "run.junit.xml", "run.md", "run.html", "run.mcap"}
@@ -206,7 +206,7 @@ def test_report_expectations_drafts_a_file_that_loads(tmp_path, capsys) -> None:
 def test_pytest_plugin_runs_clauses_as_tests(tmp_path) -> None:
     def pytest_run(*args: str) -> subprocess.CompletedProcess:
         return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--pyargs",
-                               "conformance", *args], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+                               "mavconform.conformance", *args], capture_output=True, text=True, cwd=tmp_path, timeout=120)
     ok = pytest_run("--mavlink-target", "builtin:spec", "--mavlink-clauses", "MIS.UP.01,MIS.UP.16",
                     "--mavlink-report-dir", str(tmp_path / "r"))
     assert ok.returncode == 0, ok.stdout + ok.stderr

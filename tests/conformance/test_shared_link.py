@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.catalogue import BY_ID
-from conformance.outcome import Outcome
-from conformance.runner import run_clauses
-from conformance.session import Session
-from conformance.target_uri import parse_target
+from mavconform.conformance.catalogue import BY_ID
+from mavconform.conformance.outcome import Outcome
+from mavconform.conformance.runner import run_clauses
+from mavconform.conformance.session import Session
+from mavconform.conformance.target_uri import parse_target
 
 SECOND_GCS_CLAUSES = ("MIS.GCS.01", "MIS.DN.07", "MIS.CAN.03", "MIS.ERR.02")
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance import catalogue, spec_coverage
-from conformance.clause import SEED_000
+from mavconform.conformance import catalogue, spec_coverage
+from mavconform.conformance.clause import SEED_000
 from mavconform.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]

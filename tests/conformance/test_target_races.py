@@ -9,17 +9,17 @@ GCSs do, and says "racy" where that was needed. This vehicle loses every such ra
 
 from __future__ import annotations
 
-from conformance.catalogue import CLAUSES
-from conformance.outcome import Outcome
-from conformance.runner import run_clauses
-from conformance.session import Session
-from conformance.target_uri import TargetUri, parse_target
-from reference_impl.mission import messages as m
-from reference_impl.mission.actions import Send
-from reference_impl.mission.items import MissionType
-from reference_impl.mission.server import MissionServer
-from reference_impl.net.sim import SimNetwork
-from reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.conformance.catalogue import CLAUSES
+from mavconform.conformance.outcome import Outcome
+from mavconform.conformance.runner import run_clauses
+from mavconform.conformance.session import Session
+from mavconform.conformance.target_uri import TargetUri, parse_target
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.actions import Send
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.net.sim import SimNetwork
+from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 
 class _TakesPlansLate(MissionServer):

@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 from hypothesis import strategies as st
 
-from reference_impl.files import Plan, plan_from_items
-from reference_impl.mission.constants import Cmd
-from reference_impl.mission.items import INT32_MAX, INT32_MIN, MissionItem
+from mavconform.reference_impl.files import Plan, plan_from_items
+from mavconform.reference_impl.mission.constants import Cmd
+from mavconform.reference_impl.mission.items import INT32_MAX, INT32_MIN, MissionItem
 
 # Frames whose x/y scale differs (global degE7, local metres*1e4, raw), then anything.
 frames = st.one_of(st.sampled_from([0, 1, 2, 3, 4, 6, 10, 12]), st.integers(0, 255))

@@ -11,9 +11,9 @@ from typing import Any, Callable
 import pytest
 from hypothesis import given, settings
 
-from reference_impl.files import SAMPLES_DIR, Plan, PlanFileError, load_plan, plan_from_items, save_plan
-from reference_impl.mission.constants import Cmd
-from reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.files import SAMPLES_DIR, Plan, PlanFileError, load_plan, plan_from_items, save_plan
+from mavconform.reference_impl.mission.constants import Cmd
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 from .conftest import qgc_plans
 
@@ -255,7 +255,7 @@ def test_a_plan_longer_than_mission_count_can_say_is_refused_up_front(tmp_path):
     """Issue 12: a .plan of 70,000 items ended in a struct.error traceback at upload."""
     import json
 
-    from reference_impl.files import PlanFileError, load_plan
+    from mavconform.reference_impl.files import PlanFileError, load_plan
     item = {"type": "SimpleItem", "autoContinue": True, "command": 16, "frame": 3,
             "params": [0, 0, 0, None, 47.0, 8.0, 50]}
     doc = {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",

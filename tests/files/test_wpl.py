@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from reference_impl.errors import UsageError
-from reference_impl.files import SAMPLES_DIR, PlanFileError, load_plan, plan_from_items, save_plan
-from reference_impl.files.wpl import HEADER
-from reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.files import SAMPLES_DIR, PlanFileError, load_plan, plan_from_items, save_plan
+from mavconform.reference_impl.files.wpl import HEADER
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 from .conftest import int32s, wpl_plans
 

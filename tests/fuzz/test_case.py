@@ -7,9 +7,9 @@ import math
 
 import pytest
 
-from fuzz.campaign import parse_duration
-from fuzz.case import Case, Violation, dump_case, load_case, save_case
-from reference_impl.errors import UsageError
+from mavconform.fuzz.campaign import parse_duration
+from mavconform.fuzz.case import Case, Violation, dump_case, load_case, save_case
+from mavconform.reference_impl.errors import UsageError
 
 
 def _case(**over) -> Case:

@@ -19,18 +19,18 @@ import math
 
 import pytest
 
-from conformance.mutants import MUTANTS, Mutant, server_mutant
-from fuzz import strategies as fs
-from fuzz.case import Case
-from fuzz.protocol import Knobs, replay, search
-from fuzz.protocol import machine as machine_module
-from fuzz.protocol.gcs import outgoing
-from fuzz.protocol.steps import Runner, float_variant, wire_to_items
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult
-from reference_impl.mission.items import INT32_MAX, INT32_MIN, MissionItem, MissionType, xy_scale
-from reference_impl.mission.server import MissionServer
-from reference_impl.wire.dialect import mavlink as _d
+from mavconform.conformance.mutants import MUTANTS, Mutant, server_mutant
+from mavconform.fuzz import strategies as fs
+from mavconform.fuzz.case import Case
+from mavconform.fuzz.protocol import Knobs, replay, search
+from mavconform.fuzz.protocol import machine as machine_module
+from mavconform.fuzz.protocol.gcs import outgoing
+from mavconform.fuzz.protocol.steps import Runner, float_variant, wire_to_items
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.items import INT32_MAX, INT32_MIN, MissionItem, MissionType, xy_scale
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 WAYPOINT = {"frame": 3, "command": 16, "current": 0, "autocontinue": 1, "param1": 0.0,
             "param2": 0.0, "param3": 0.0, "param4": float("nan"), "x": 473977420,

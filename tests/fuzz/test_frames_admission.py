@@ -29,21 +29,21 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conformance.target_uri import parse_target
-from fuzz.case import Case
-from fuzz.frames import replay, wire
-from fuzz.frames.admission import INERT, TARGET_TABLE, Admission
-from fuzz.frames.cparser import (BAD_CRC, DIALECT_TABLE, FRAME_CHAR_BUFFER, OK, PARSE_CHAR,
+from mavconform.conformance.target_uri import parse_target
+from mavconform.fuzz.case import Case
+from mavconform.fuzz.frames import replay, wire
+from mavconform.fuzz.frames.admission import INERT, TARGET_TABLE, Admission
+from mavconform.fuzz.frames.cparser import (BAD_CRC, DIALECT_TABLE, FRAME_CHAR_BUFFER, OK, PARSE_CHAR,
                                  VARIANTS, CParser, ParsedFrame)
-from fuzz.frames.mutators import MUTATORS, MutationContext
-from fuzz.frames.program import Builder, FrameSpec, programs
-from fuzz.frames.rig import Rig, _plan_diff
-from fuzz.frames.templates import GCS_IDS, TEMPLATE_NAMES, TEMPLATES
-from reference_impl.mission import messages as m
-from reference_impl.mission.items import MissionType
-from reference_impl.net.clock import SimClock
-from reference_impl.wire.codec import FrameEncoder
-from reference_impl.wire.dialect import XML_PATH
+from mavconform.fuzz.frames.mutators import MUTATORS, MutationContext
+from mavconform.fuzz.frames.program import Builder, FrameSpec, programs
+from mavconform.fuzz.frames.rig import Rig, _plan_diff
+from mavconform.fuzz.frames.templates import GCS_IDS, TEMPLATE_NAMES, TEMPLATES
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.net.clock import SimClock
+from mavconform.reference_impl.wire.codec import FrameEncoder
+from mavconform.reference_impl.wire.dialect import XML_PATH
 
 KEY, WRONG = bytes(range(32)), bytes(range(1, 33))
 TARGET = (1, 1)
@@ -370,7 +370,7 @@ def test_each_c_only_acceptance_is_neutralised(c_build, name: str) -> None:
     datagrams = CASES[name]
     raw = [b"".join(d) for d in datagrams]
     # our per-datagram decoder sees no valid MISSION_CLEAR_ALL here, a C parser does
-    from reference_impl.wire.codec import FrameDecoder
+    from mavconform.reference_impl.wire.codec import FrameDecoder
     assert not [i for d in raw for i in FrameDecoder().feed(d) if getattr(i, "name", None) == "MISSION_CLEAR_ALL"]
     found = {v: [TARGET_TABLE.name(f.msgid) for f in accepted(v, raw)] for v in VARIANTS}
     assert any("MISSION_CLEAR_ALL" in names for names in found.values()), found
@@ -422,7 +422,7 @@ def test_a_datagram_whose_flips_do_not_settle_is_filled(monkeypatch) -> None:
     """If flipping cannot settle a datagram (here: no checksum byte may be flipped), the
     offending frame's bytes are replaced by a filler with no start byte, and `last_filled`
     names the frames."""
-    import fuzz.frames.admission as admission
+    import mavconform.fuzz.frames.admission as admission
     monkeypatch.setattr(admission, "_crc_byte", lambda *a: None)
     hidden = CASES["hidden in an unknown-incompat frame"][0][0]
     adm = Admission(None, False, CLOCK.wall)

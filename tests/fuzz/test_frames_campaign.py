@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import pytest
 
-from conformance.mutants import MUTANTS
-from fuzz.case import Case, load_case, save_case
-from fuzz.frames import FrameCampaign, replay, search
-from fuzz.frames import engine
-from fuzz.outcomes import TargetUnresponsive
-from reference_impl.errors import UsageError
-from reference_impl.net import UdpDriver
-from reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.conformance.mutants import MUTANTS
+from mavconform.fuzz.case import Case, load_case, save_case
+from mavconform.fuzz.frames import FrameCampaign, replay, search
+from mavconform.fuzz.frames import engine
+from mavconform.fuzz.outcomes import TargetUnresponsive
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net import UdpDriver
+from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 PLANTED = "mutant:raises-on-truncated-frame"
 
@@ -78,11 +78,11 @@ def test_the_same_seed_sends_the_same_frames() -> None:
 def test_a_signed_vehicle_ignores_what_it_cannot_verify() -> None:
     """Unsigned, wrong-key and stale copies of MISSION_CLEAR_ALL go out intact to a vehicle
     that requires signatures; the plan must survive them."""
-    from fuzz.frames.mutators import MUTATORS
-    from fuzz.frames.program import FrameSpec
-    from fuzz.frames.templates import TEMPLATE_NAMES
-    from fuzz.frames.rig import Rig
-    from conformance.target_uri import parse_target
+    from mavconform.fuzz.frames.mutators import MUTATORS
+    from mavconform.fuzz.frames.program import FrameSpec
+    from mavconform.fuzz.frames.templates import TEMPLATE_NAMES
+    from mavconform.fuzz.frames.rig import Rig
+    from mavconform.conformance.target_uri import parse_target
     clear = TEMPLATE_NAMES.index("MISSION_CLEAR_ALL all")
     names = list(MUTATORS)
     rig = Rig(parse_target("builtin:spec"), seed=1, signing=True)

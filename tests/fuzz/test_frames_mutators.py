@@ -5,15 +5,15 @@ from __future__ import annotations
 
 import pytest
 
-from fuzz.frames import wire
-from fuzz.frames.admission import INERT, Admission
-from fuzz.frames.mutators import MUTATORS, MutationContext
-from fuzz.frames.program import CHUNK, RECORD, parse
-from fuzz.frames.templates import GCS_IDS, TEMPLATES
-from reference_impl.net.clock import SimClock
-from reference_impl.wire.codec import FrameDecoder, FrameEncoder
-from reference_impl.wire.frame import DecodeError, Frame, SignatureVerdict
-from reference_impl.wire.signing import SigningKey
+from mavconform.fuzz.frames import wire
+from mavconform.fuzz.frames.admission import INERT, Admission
+from mavconform.fuzz.frames.mutators import MUTATORS, MutationContext
+from mavconform.fuzz.frames.program import CHUNK, RECORD, parse
+from mavconform.fuzz.frames.templates import GCS_IDS, TEMPLATES
+from mavconform.reference_impl.net.clock import SimClock
+from mavconform.reference_impl.wire.codec import FrameDecoder, FrameEncoder
+from mavconform.reference_impl.wire.frame import DecodeError, Frame, SignatureVerdict
+from mavconform.reference_impl.wire.signing import SigningKey
 
 KEY, WRONG = bytes(range(32)), bytes(range(1, 33))
 TARGET = (1, 1)
@@ -103,7 +103,7 @@ def test_admission_breaks_the_checksum_of_accepted_plan_changing_frames_only() -
 @pytest.mark.parametrize("seed", range(40))
 def test_nothing_admitted_decodes_as_an_accepted_non_inert_message(seed: int) -> None:
     import random
-    from fuzz.frames.program import Builder
+    from mavconform.fuzz.frames.program import Builder
     for key in (None, KEY):
         c = ctx()
         adm = Admission(key, key is not None, CLOCK.wall)
@@ -116,7 +116,7 @@ def test_nothing_admitted_decodes_as_an_accepted_non_inert_message(seed: int) ->
 
 
 def test_program_records_parse_into_datagrams_of_one_to_eight_frames() -> None:
-    from fuzz.frames.program import FrameSpec
+    from mavconform.fuzz.frames.program import FrameSpec
     assert parse(bytes(RECORD * 3)) == [[FrameSpec(0, 0, 0, 0)]] * 3   # zero bytes: simplest
     joined = parse(bytes([0xFF, 0, 0, 0, 0]) * 20)
     assert [len(d) for d in joined] == [8, 8, 4]

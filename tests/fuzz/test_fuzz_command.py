@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from fuzz.case import load_case
+from mavconform.fuzz.case import load_case
 from mavconform.cli import main
-from reports.run_document import load_run
+from mavconform.reports.run_document import load_run
 
 PLANTED = "mutant:raises-on-truncated-frame"
 
@@ -102,7 +102,7 @@ def test_database_must_be_a_directory(tmp_path, capsys) -> None:
 def _pytest_fuzz(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
     return subprocess.run(
-        [sys.executable, "-m", "pytest", "--pyargs", "fuzz", "-p", "no:cacheprovider", "-n", "2", "-v",
+        [sys.executable, "-m", "pytest", "--pyargs", "mavconform.fuzz", "-p", "no:cacheprovider", "-n", "2", "-v",
          "--fuzz-findings", str(tmp_path / "found"), "--fuzz-database", str(tmp_path / "db"), *args],
         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
 
@@ -130,9 +130,9 @@ def test_a_bad_fuzz_option_is_a_pytest_usage_error(tmp_path) -> None:
 def test_a_finding_keeps_only_the_steps_its_violation_needs() -> None:
     """The step-removal pass after Hypothesis: steps that do not matter are dropped, judged
     by replaying, and the kept case still breaks the same invariant."""
-    from fuzz import protocol
-    from fuzz.campaign import minimise
-    from fuzz.case import Case, Violation
+    from mavconform.fuzz import protocol
+    from mavconform.fuzz.campaign import minimise
+    from mavconform.fuzz.case import Case, Violation
 
     item = {"autocontinue": 1, "command": 5000, "current": 0, "frame": 0, "param1": 0.0, "param2": 0.0,
             "param3": 0.0, "param4": 0.0, "x": 0, "y": 0, "z": 0.0}
@@ -154,7 +154,7 @@ def test_a_finding_keeps_only_the_steps_its_violation_needs() -> None:
     {"op": "set_current", "seq": 1e9},
 ])
 def test_a_hand_edited_case_is_a_usage_error_not_a_traceback(tmp_path, capsys, step) -> None:
-    from fuzz.case import Case, save_case
+    from mavconform.fuzz.case import Case, save_case
 
     path = save_case(Case("protocol", "builtin:spec", 0, (step,)), tmp_path)
     assert main(["fuzz", "--replay", str(path)]) == 2
@@ -208,7 +208,7 @@ def test_protocol_fuzzing_a_single_peer_vehicle_over_udp_is_heard(tmp_path) -> N
 def test_an_exception_of_ours_is_a_tool_error_not_a_finding(tmp_path, capsys, monkeypatch) -> None:
     """Issue 11: a bug inside mavconform during a campaign is reported apart (exit 3) with
     the steps that led to it saved for the bug report; no finding about the target."""
-    from fuzz.protocol.steps import Runner
+    from mavconform.fuzz.protocol.steps import Runner
 
     def broken(self, step):
         if step.get("op") == "download":
@@ -229,7 +229,7 @@ def test_an_exception_of_ours_is_a_tool_error_not_a_finding(tmp_path, capsys, mo
 
 def test_an_exception_outside_any_example_is_a_tool_error_too(tmp_path, capsys, monkeypatch) -> None:
     """E.g. Hypothesis itself raising (FlakyStrategyDefinition): still ours, exit 3."""
-    import fuzz.protocol as protocol
+    import mavconform.fuzz.protocol as protocol
 
     def broken_search(*args, **kwargs):
         raise RuntimeError("planted failure in the search loop")

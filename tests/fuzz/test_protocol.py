@@ -15,12 +15,12 @@ import json
 
 import pytest
 
-from fuzz.case import Case, load_case, save_case
-from fuzz.protocol import INVARIANTS, Knobs, replay, search
-from fuzz.protocol import machine as machine_module
-from fuzz.protocol.steps import Runner
-from reference_impl.errors import UsageError
-from reference_impl.mission.server import MissionServer
+from mavconform.fuzz.case import Case, load_case, save_case
+from mavconform.fuzz.protocol import INVARIANTS, Knobs, replay, search
+from mavconform.fuzz.protocol import machine as machine_module
+from mavconform.fuzz.protocol.steps import Runner
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.mission.server import MissionServer
 
 WAYPOINT = {"frame": 3, "command": 16, "current": 0, "autocontinue": 1, "param1": 0.0,
             "param2": 0.0, "param3": 0.0, "param4": float("nan"), "x": 473977420,
@@ -190,8 +190,8 @@ def test_a_float_item_may_be_stored_truncated_as_a_c_vehicle_does():
     """Learned on ArduCopter SITL: a rally point sent by MISSION_ITEM with x = -1940 degE7
     (float -0.000194) was stored as -1939 (`x = packet.x * 1.0e7f`, a cast that truncates).
     Both conversions are versions the vehicle may hold; nothing else is."""
-    from fuzz.protocol.steps import float_variant
-    from reference_impl.mission.items import MissionItem, MissionType
+    from mavconform.fuzz.protocol.steps import float_variant
+    from mavconform.reference_impl.mission.items import MissionItem, MissionType
     plan = (MissionItem(0, 6, 5100, x=-1940, y=-5160, z=10.0, mission_type=MissionType.RALLY),)
     rounded, truncated = float_variant(plan), float_variant(plan, truncate=True)
     assert (rounded[0].x, rounded[0].y) == (-1940, -5160)

@@ -15,13 +15,13 @@ from typing import Iterator
 
 import pytest
 
-from conformance.mutants import MUTANTS
-from fuzz.case import Case
-from fuzz.protocol import Knobs, replay, search
-from fuzz.outcomes import TargetUnresponsive
-from fuzz.protocol import connection as connection_mod
-from reference_impl.net import UdpDriver
-from reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.conformance.mutants import MUTANTS
+from mavconform.fuzz.case import Case
+from mavconform.fuzz.protocol import Knobs, replay, search
+from mavconform.fuzz.outcomes import TargetUnresponsive
+from mavconform.fuzz.protocol import connection as connection_mod
+from mavconform.reference_impl.net import UdpDriver
+from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 pytestmark = pytest.mark.udp
 

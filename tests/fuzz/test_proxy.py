@@ -15,17 +15,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from mcap.reader import make_reader
 
-from fuzz.proxy import DOWN, FRONT, UP, ChaosProxy, ProxyNode, UdpProxy
+from mavconform.fuzz.proxy import DOWN, FRONT, UP, ChaosProxy, ProxyNode, UdpProxy
 from mavconform.cli import main
-from reference_impl.files import SAMPLES_DIR, load_plan
-from reference_impl.gcs import GcsConfig, GcsNode
-from reference_impl.mission.items import PLAN_TYPES, MissionType, renumber
-from reference_impl.mission.timing import Timings
-from reference_impl.net import (CaptureRecord, DropMessage, FaultModel, McapCapture, MonotonicClock,
+from mavconform.reference_impl.files import SAMPLES_DIR, load_plan
+from mavconform.reference_impl.gcs import GcsConfig, GcsNode
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType, renumber
+from mavconform.reference_impl.mission.timing import Timings
+from mavconform.reference_impl.net import (CaptureRecord, DropMessage, FaultModel, McapCapture, MonotonicClock,
                                 SimNetwork, UdpDriver)
-from reference_impl.session import GcsSession
-from reference_impl.vehicle import VehicleNode
-from reference_impl.wire.codec import FrameDecoder
+from mavconform.reference_impl.session import GcsSession
+from mavconform.reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.wire.codec import FrameDecoder
 
 PLAN = load_plan(SAMPLES_DIR / "demo.plan")
 LOSSY = dict(loss=0.05, duplicate=0.1, reorder=0.1, reorder_delay=0.03, delay=0.005, jitter=0.005)
@@ -432,8 +432,8 @@ def test_cli_option_values_are_checked(capsys):
 
 
 def _heartbeat_bytes() -> bytes:
-    from reference_impl.wire.codec import FrameEncoder
-    from reference_impl.wire.dialect import mavlink as d
+    from mavconform.reference_impl.wire.codec import FrameEncoder
+    from mavconform.reference_impl.wire.dialect import mavlink as d
 
     return FrameEncoder(1, 1).encode(d.MAVLink_heartbeat_message(2, 4, 0, 0, 3, 3))
 

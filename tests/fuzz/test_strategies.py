@@ -13,17 +13,17 @@ from hypothesis import HealthCheck, Phase, find, given, settings
 from hypothesis import strategies as st
 from hypothesis.errors import NoSuchExample
 
-from fuzz import strategies as fs
-from fuzz.protocol.faults import CutAfter, build_fault_model
-from fuzz.protocol.gcs import outgoing
-from fuzz.protocol.steps import wire_to_items
-from reference_impl.mission import messages as m
-from reference_impl.mission.items import (
+from mavconform.fuzz import strategies as fs
+from mavconform.fuzz.protocol.faults import CutAfter, build_fault_model
+from mavconform.fuzz.protocol.gcs import outgoing
+from mavconform.fuzz.protocol.steps import wire_to_items
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.items import (
     GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, MissionType, to_float32,
 )
-from reference_impl.mission.validation import first_defect
-from reference_impl.wire.codec import FrameDecoder, FrameEncoder
-from reference_impl.wire.dialect import mavlink as _d
+from mavconform.reference_impl.mission.validation import first_defect
+from mavconform.reference_impl.wire.codec import FrameDecoder, FrameEncoder
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 # the first example found is enough: no shrinking (which is most of find()'s time)
 FIND = settings(max_examples=5000, database=None, phases=[Phase.generate],

@@ -20,9 +20,9 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
-from fuzz import campaign
-from fuzz.case import Case, load_case
-from fuzz.protocol import replay
+from mavconform.fuzz import campaign
+from mavconform.fuzz.case import Case, load_case
+from mavconform.fuzz.protocol import replay
 from mavconform.cli import main
 from tests.vehicle_process import vehicle_process
 

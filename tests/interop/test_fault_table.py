@@ -7,15 +7,15 @@ from pathlib import Path
 import pytest
 
 from mavconform.cli import main
-from reference_impl.interop import fault_table, report
-from reference_impl.interop.fault_table import FAILS_UNCLEANLY, RECOVERS, run_cell
-from reference_impl.interop.harness import build_pair, sample_plan
-from reference_impl.interop.mocklink import MODES, MODES_BY_ID, MockLinkVehicle
-from reference_impl.mission.client import MissionClient
-from reference_impl.mission.items import MissionType as T
-from reference_impl.mission.results import Operation
-from reference_impl.profiles import BUILTIN_PROFILES, load_profile
-from reference_impl.wire.codec import FrameDecoder
+from mavconform.reference_impl.interop import fault_table, report
+from mavconform.reference_impl.interop.fault_table import FAILS_UNCLEANLY, RECOVERS, run_cell
+from mavconform.reference_impl.interop.harness import build_pair, sample_plan
+from mavconform.reference_impl.interop.mocklink import MODES, MODES_BY_ID, MockLinkVehicle
+from mavconform.reference_impl.mission.client import MissionClient
+from mavconform.reference_impl.mission.items import MissionType as T
+from mavconform.reference_impl.mission.results import Operation
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
+from mavconform.reference_impl.wire.codec import FrameDecoder
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "fault-tolerance.md"
 PROFILES = [load_profile(name) for name in BUILTIN_PROFILES]

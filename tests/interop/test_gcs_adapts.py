@@ -9,13 +9,13 @@ import dataclasses
 import pytest
 
 from mavconform.cli import main
-from reference_impl.files import SAMPLES_DIR
-from reference_impl.gcs import GcsConfig, GcsNode
-from reference_impl.interop.harness import build_pair, expected_plan, sample_plan
-from reference_impl.mission.adaptations import ARDUPILOT, NONE, PX4, for_autopilot
-from reference_impl.mission.items import MissionType as T
-from reference_impl.net import SimNetwork
-from reference_impl.profiles import load_profile
+from mavconform.reference_impl.files import SAMPLES_DIR
+from mavconform.reference_impl.gcs import GcsConfig, GcsNode
+from mavconform.reference_impl.interop.harness import build_pair, expected_plan, sample_plan
+from mavconform.reference_impl.mission.adaptations import ARDUPILOT, NONE, PX4, for_autopilot
+from mavconform.reference_impl.mission.items import MissionType as T
+from mavconform.reference_impl.net import SimNetwork
+from mavconform.reference_impl.profiles import load_profile
 
 from ..vehicle_process import vehicle_process
 
@@ -91,7 +91,7 @@ def test_gcs_command_prints_the_adaptations_it_chose_and_used(ardupilot_port, tm
 def test_a_lost_final_ack_is_recovered_on_every_profile(name):
     """The vehicle repeats ACCEPTED for a late copy of the last item; on ArduPilot that copy
     must be compared in the form the vehicle stored it (compact items), or it never matches."""
-    from reference_impl.net import DropMessage, FaultModel
+    from mavconform.reference_impl.net import DropMessage, FaultModel
 
     profile = load_profile(name)
     plan = [dataclasses.replace(item, frame=6, z=50.5 + item.seq) for item in sample_plan(3)]

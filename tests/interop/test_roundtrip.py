@@ -18,10 +18,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from reference_impl.interop.harness import IDLE_BOUND, build_pair, expected_plan
-from reference_impl.interop.roundtrip import attempt
-from reference_impl.mission.items import PLAN_TYPES, MissionType as T
-from reference_impl.profiles import BUILTIN_PROFILES, load_profile
+from mavconform.reference_impl.interop.harness import IDLE_BOUND, build_pair, expected_plan
+from mavconform.reference_impl.interop.roundtrip import attempt
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType as T
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 
 from ..strategies import fault_models, plan_items
 

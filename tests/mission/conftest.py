@@ -1,6 +1,6 @@
 import pytest
 
-from reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 
 def waypoint(seq: int, mission_type: MissionType = MissionType.MISSION, **kw) -> MissionItem:

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from reference_impl.mission.actions import Finished, Send
-from reference_impl.wire import FrameDecoder, FrameEncoder
-from reference_impl.wire.dialect import mavlink as d
+from mavconform.reference_impl.mission.actions import Finished, Send
+from mavconform.reference_impl.wire import FrameDecoder, FrameEncoder
+from mavconform.reference_impl.wire.dialect import mavlink as d
 
 GCS = (255, 190)
 OTHER_GCS = (254, 190)

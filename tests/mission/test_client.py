@@ -6,16 +6,16 @@ from dataclasses import replace
 
 import pytest
 
-from reference_impl.errors import LocalProtocolError
-from reference_impl.mission import messages as m
-from reference_impl.mission.adaptations import ARDUPILOT, NONE, PX4
-from reference_impl.mission.client import MissionClient
-from reference_impl.mission.constants import MissionResult as R
-from reference_impl.mission.items import MissionItem, MissionType
-from reference_impl.mission.items import MissionType as T
-from reference_impl.mission.results import Operation, Outcome
-from reference_impl.mission.transitions import CLIENT_TRANSITIONS, ClientState
-from reference_impl.wire.dialect import mavlink as d
+from mavconform.reference_impl.errors import LocalProtocolError
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.adaptations import ARDUPILOT, NONE, PX4
+from mavconform.reference_impl.mission.client import MissionClient
+from mavconform.reference_impl.mission.constants import MissionResult as R
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission.items import MissionType as T
+from mavconform.reference_impl.mission.results import Operation, Outcome
+from mavconform.reference_impl.mission.transitions import CLIENT_TRANSITIONS, ClientState
+from mavconform.reference_impl.wire.dialect import mavlink as d
 
 from .conftest import plan
 from .script import GCS, VEHICLE, Script, names, only
@@ -582,7 +582,7 @@ def test_long_vehicle_timeout_waits_out_the_vehicle_before_giving_up():
 
 
 def test_long_vehicle_timeout_outlasts_fast_gcs_timings():
-    from reference_impl.mission.timing import Timings
+    from mavconform.reference_impl.mission.timing import Timings
     s = Script(MissionClient(*GCS, VEHICLE, Timings(default_timeout=0.5), adaptations=ARDUPILOT))
     s.call(s.engine.upload(T.MISSION, plan(3), s.now))
     s.feed(req(0), VEHICLE)
@@ -733,10 +733,10 @@ def test_a_generic_nack_after_the_last_item_waits_for_a_late_accept_when_adapted
 # taken as the answer to MISSION_CLEAR_ALL when it can be told apart.
 
 def _clear_session(up, down):
-    from reference_impl.gcs import GcsNode
-    from reference_impl.net import SimNetwork
-    from reference_impl.session import GcsSession
-    from reference_impl.vehicle import VehicleNode
+    from mavconform.reference_impl.gcs import GcsNode
+    from mavconform.reference_impl.net import SimNetwork
+    from mavconform.reference_impl.session import GcsSession
+    from mavconform.reference_impl.vehicle import VehicleNode
 
     net = SimNetwork(seed=0)
     vehicle = VehicleNode(wall_clock=net.clock.wall)
@@ -750,7 +750,7 @@ def _clear_session(up, down):
 
 
 def test_a_late_upload_accept_does_not_answer_a_lost_clear():
-    from reference_impl.net import DropMessage, FaultModel
+    from mavconform.reference_impl.net import DropMessage, FaultModel
 
     net, vehicle, s = _clear_session(FaultModel(rules=(DropMessage("MISSION_CLEAR_ALL", 1),)),
                                      FaultModel(duplicate=1.0, reorder=1.0, reorder_delay=0.5))
@@ -761,7 +761,7 @@ def test_a_late_upload_accept_does_not_answer_a_lost_clear():
 
 
 def test_a_late_item_nack_does_not_answer_a_clear():
-    from reference_impl.net import DropWhere, FaultModel
+    from mavconform.reference_impl.net import DropWhere, FaultModel
 
     clear_ack = DropWhere(lambda m: m.get_type() == "MISSION_ACK" and m.type == 0 and m.opaque_id == 0, limit=1)
     net, vehicle, s = _clear_session(None, FaultModel(duplicate=1.0, reorder=1.0, reorder_delay=0.5,

@@ -16,12 +16,12 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from reference_impl.gcs import GcsNode
-from reference_impl.mission.items import PLAN_TYPES, MissionType as T, renumber
-from reference_impl.mission.transitions import SlotState
-from reference_impl.net import FaultModel, SimNetwork
-from reference_impl.session import GcsSession
-from reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.gcs import GcsNode
+from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType as T, renumber
+from mavconform.reference_impl.mission.transitions import SlotState
+from mavconform.reference_impl.net import FaultModel, SimNetwork
+from mavconform.reference_impl.session import GcsSession
+from mavconform.reference_impl.vehicle import VehicleNode
 
 from ..strategies import fault_models, plan_items
 

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from reference_impl.gcs import GcsNode
-from reference_impl.mission.items import MissionType
-from reference_impl.mission.results import Outcome
-from reference_impl.net import DropMessage, FaultModel, SimNetwork
-from reference_impl.session import GcsSession
-from reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.gcs import GcsNode
+from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission.results import Outcome
+from mavconform.reference_impl.net import DropMessage, FaultModel, SimNetwork
+from mavconform.reference_impl.session import GcsSession
+from mavconform.reference_impl.vehicle import VehicleNode
 
 from .conftest import plan
 

@@ -7,14 +7,14 @@ from dataclasses import replace
 
 import pytest
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.behaviour import ServerBehaviour
-from reference_impl.mission.constants import CommandResult, MissionResult as R, MissionState
-from reference_impl.mission.items import MissionType as T
-from reference_impl.mission.server import MissionServer
-from reference_impl.mission.timing import Timings
-from reference_impl.mission.transitions import SERVER_TRANSITIONS, SlotState
-from reference_impl.wire.dialect import mavlink as d
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.behaviour import ServerBehaviour
+from mavconform.reference_impl.mission.constants import CommandResult, MissionResult as R, MissionState
+from mavconform.reference_impl.mission.items import MissionType as T
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.mission.timing import Timings
+from mavconform.reference_impl.mission.transitions import SERVER_TRANSITIONS, SlotState
+from mavconform.reference_impl.wire.dialect import mavlink as d
 
 from .conftest import plan, waypoint
 from .script import (

@@ -4,10 +4,10 @@ import pymavlink.dialects.v20.common as common
 import pytest
 from mcap.reader import make_reader
 
-from reference_impl.errors import UsageError
-from reference_impl.net import CaptureRecord, McapCapture, SimNetwork
-from reference_impl.net.capture import json_safe
-from reference_impl.wire import FrameEncoder
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net import CaptureRecord, McapCapture, SimNetwork
+from mavconform.reference_impl.net.capture import json_safe
+from mavconform.reference_impl.wire import FrameEncoder
 
 from .nodes import EchoNode, RecorderNode
 

@@ -2,7 +2,7 @@ import math
 
 import pytest
 
-from reference_impl.net import MonotonicClock, SimClock
+from mavconform.reference_impl.net import MonotonicClock, SimClock
 
 
 def test_simclock_starts_and_advances():

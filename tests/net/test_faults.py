@@ -4,9 +4,9 @@ import random
 import pymavlink.dialects.v20.common as common
 import pytest
 
-from reference_impl.errors import UsageError
-from reference_impl.net import DropMessage, DropWhere, FaultModel, LinkStats, parse_drop_rule
-from reference_impl.wire import FrameEncoder
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net import DropMessage, DropWhere, FaultModel, LinkStats, parse_drop_rule
+from mavconform.reference_impl.wire import FrameEncoder
 
 N = 20_000
 DATA = bytes(range(40))

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from reference_impl.net.guard import GuardedNode
-from reference_impl.net.sim import SimNetwork
+from mavconform.reference_impl.net.guard import GuardedNode
+from mavconform.reference_impl.net.sim import SimNetwork
 
 
 class _Bomb:

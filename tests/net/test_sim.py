@@ -1,8 +1,8 @@
 import pymavlink.dialects.v20.common as common
 import pytest
 
-from reference_impl.net import CaptureRecord, DropMessage, FaultModel, SimClock, SimNetwork
-from reference_impl.wire import FrameEncoder
+from mavconform.reference_impl.net import CaptureRecord, DropMessage, FaultModel, SimClock, SimNetwork
+from mavconform.reference_impl.wire import FrameEncoder
 
 from .nodes import EchoNode, PingNode, RecorderNode, SenderNode, TimerNode
 

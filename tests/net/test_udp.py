@@ -2,8 +2,8 @@ import socket
 
 import pytest
 
-from reference_impl.errors import UsageError
-from reference_impl.net import CaptureRecord, FaultModel, MonotonicClock, UdpDriver
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net import CaptureRecord, FaultModel, MonotonicClock, UdpDriver
 
 from .nodes import EchoNode, RecorderNode, SenderNode, TimerNode
 

@@ -1,7 +1,7 @@
 import pytest
 
-from reference_impl.errors import UsageError
-from reference_impl.net import UdpUri, parse_udp_uri
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net import UdpUri, parse_udp_uri
 
 
 @pytest.mark.parametrize("text, expected", [

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance import expectations
-from conformance.expectations import BUNDLED
+from mavconform.conformance import expectations
+from mavconform.conformance.expectations import BUNDLED
 from mavconform.cli import main
 
 

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from reference_impl.mission import messages as m
-from reference_impl.mission.constants import MissionResult as R
-from reference_impl.mission.items import MissionType as T
-from reference_impl.mission.server import MissionServer
-from reference_impl.mission.transitions import PROFILE_TRANSITIONS
-from reference_impl.profiles import load_profile
-from reference_impl.wire.dialect import mavlink as d
+from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import MissionResult as R
+from mavconform.reference_impl.mission.items import MissionType as T
+from mavconform.reference_impl.mission.server import MissionServer
+from mavconform.reference_impl.mission.transitions import PROFILE_TRANSITIONS
+from mavconform.reference_impl.profiles import load_profile
+from mavconform.reference_impl.wire.dialect import mavlink as d
 
 from ..mission.conftest import plan, waypoint
 from ..mission.script import (
@@ -153,7 +153,7 @@ def test_clear_all_types_is_unsupported_and_a_flown_mission_is_not_cleared():   
 def _v1_with_extensions(msg):
     """A MAVLink 1 frame that still carries the extension fields (pymavlink's own v1 pack
     does this), so a MAVLink 1 link can name a fence transfer at all."""
-    from reference_impl.wire import FrameDecoder
+    from mavconform.reference_impl.wire import FrameDecoder
     (frame,) = FrameDecoder().feed(bytes(msg.pack(d.MAVLink(None, *GCS), force_mavlink1=True)))
     assert frame.version == 1 and frame.msg.mission_type == msg.mission_type
     return frame
@@ -170,7 +170,7 @@ def test_fence_and_rally_need_mavlink2():                          # A11
 
 
 def test_the_older_dialect_is_byte_identical_to_frames_without_plan_ids():   # A19
-    from reference_impl.wire import FrameEncoder
+    from mavconform.reference_impl.wire import FrameEncoder
     s = server("ardupilot")
     final = only(upload(s, plan(2)), "MISSION_ACK")[0]
     assert final.opaque_id == 0

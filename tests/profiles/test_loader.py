@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from reference_impl.errors import UsageError
-from reference_impl.mission.items import MissionItem, MissionType
-from reference_impl.profiles import load_profile
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.profiles import load_profile
 
 
 def _write(tmp_path, text: str, name: str = "mine.toml"):

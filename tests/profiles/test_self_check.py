@@ -8,13 +8,13 @@ import re
 
 import pytest
 
-from conformance import expectations
-from conformance.catalogue import CLAUSES
-from conformance.outcome import Outcome
-from conformance.runner import run_clauses
-from conformance.session import Session
-from conformance.target_uri import parse_target
-from reference_impl.profiles import BUILTIN_PROFILES, load_profile
+from mavconform.conformance import expectations
+from mavconform.conformance.catalogue import CLAUSES
+from mavconform.conformance.outcome import Outcome
+from mavconform.conformance.runner import run_clauses
+from mavconform.conformance.session import Session
+from mavconform.conformance.target_uri import parse_target
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 
 AUTOPILOTS = ("px4", "ardupilot")
 # Rows of VARIANTS.md each profile must account for (by a knob or a documented reason).
@@ -68,8 +68,8 @@ def test_the_profile_accounts_for_every_row_of_its_autopilot(name: str) -> None:
 
 
 def test_spec_profile_is_the_default_vehicle() -> None:
-    from reference_impl.mission.behaviour import ServerBehaviour
-    from reference_impl.vehicle import VehicleConfig
+    from mavconform.reference_impl.mission.behaviour import ServerBehaviour
+    from mavconform.reference_impl.vehicle import VehicleConfig
     spec = load_profile("spec")
     assert spec.behaviour == ServerBehaviour() and spec.config == VehicleConfig() and not spec.settings
     assert set(BUILTIN_PROFILES) == {"spec", *AUTOPILOTS}

@@ -1,8 +1,8 @@
 import re
 from html.parser import HTMLParser
 
-from reports.html import html_report
-from reports.sequence_svg import MAX_EVENTS, sequence_diagram
+from mavconform.reports.html import html_report
+from mavconform.reports.sequence_svg import MAX_EVENTS, sequence_diagram
 
 from .sample import FAILED_ARROWS, UPLOAD_OK, event
 

@@ -1,6 +1,6 @@
 import xml.etree.ElementTree as ET
 
-from reports.junit import junit_xml
+from mavconform.reports.junit import junit_xml
 
 from .sample import HOSTILE
 

@@ -1,6 +1,6 @@
 import re
 
-from reports.markdown import markdown_summary
+from mavconform.reports.markdown import markdown_summary
 
 
 def table_rows(text, first_header):

@@ -3,8 +3,8 @@ import json
 
 import pytest
 
-from reference_impl.errors import UsageError
-from reports.run_document import FORMAT, OUTCOMES, check_run, dump_run, load_run
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reports.run_document import FORMAT, OUTCOMES, check_run, dump_run, load_run
 
 
 def write(tmp_path, text, name="run.json"):

@@ -3,9 +3,9 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from reference_impl.errors import UsageError
-from reports.run_document import dump_run, load_run
-from reports.write import write_reports
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reports.run_document import dump_run, load_run
+from mavconform.reports.write import write_reports
 
 
 def test_writes_every_report(doc, tmp_path):

@@ -16,16 +16,16 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pymavlink.dialects.v20 import common as bundled
 
-from reference_impl.wire.codec import (
+from mavconform.reference_impl.wire.codec import (
     MAGIC_V1,
     MAGIC_V2,
     FrameDecoder,
     FrameEncoder,
     frames_only,
 )
-from reference_impl.wire.dialect import XML_PATH, mavlink
-from reference_impl.wire.frame import DecodeError, Frame, SignatureVerdict
-from reference_impl.wire.signing import SigningKey
+from mavconform.reference_impl.wire.dialect import XML_PATH, mavlink
+from mavconform.reference_impl.wire.frame import DecodeError, Frame, SignatureVerdict
+from mavconform.reference_impl.wire.signing import SigningKey
 
 FIXED_WALL = 1_700_000_000.0
 KEY = SigningKey(bytes(range(32)), link_id=7)
@@ -511,7 +511,7 @@ def test_mavlink1_frames_carry_only_base_fields():
     and a decoder of the older dialect (pymavlink's bundled common.xml) reads it."""
     from pymavlink.dialects.v20 import common as bundled
 
-    from reference_impl.wire.codec import base_payload_length
+    from mavconform.reference_impl.wire.codec import base_payload_length
 
     raw = FrameEncoder(1, 1, version=1).encode(mavlink.MAVLink_mission_count_message(1, 1, 5, 2, 77))
     assert raw[0] == 0xFE and raw[1] == 4 == base_payload_length(mavlink.MAVLink_mission_count_message)

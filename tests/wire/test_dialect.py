@@ -11,7 +11,7 @@ import pytest
 from pymavlink.dialects.v20 import common as bundled
 from pymavlink.generator import mavparse
 
-from reference_impl.wire.dialect import XML_PATH, mavlink, regenerate
+from mavconform.reference_impl.wire.dialect import XML_PATH, mavlink, regenerate
 
 # Beside the repository, wherever it is cloned: <repo_root>.parent / "shared".
 UPSTREAM_DIR = Path(__file__).resolve().parents[3] / "shared" / "mavlink-upstream"
@@ -212,4 +212,4 @@ def test_roundtrip_mavlink1(msg: Any) -> None:
 # --- 4. the committed module is what mavgen makes of the XML -------------------------------
 
 def test_generated_module_is_up_to_date() -> None:
-    assert regenerate.check() == "identical", "run: python -m reference_impl.wire.dialect.regenerate"
+    assert regenerate.check() == "identical", "run: python -m mavconform.reference_impl.wire.dialect.regenerate"

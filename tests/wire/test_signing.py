@@ -16,10 +16,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from reference_impl.wire.codec import IFLAG_SIGNED, SIGNATURE_LEN, FrameDecoder, FrameEncoder
-from reference_impl.wire.dialect import mavlink
-from reference_impl.wire.frame import DecodeError, Frame, SignatureVerdict
-from reference_impl.wire.signing import SIGNING_EPOCH_UNIX, SigningKey, signing_timestamp
+from mavconform.reference_impl.wire.codec import IFLAG_SIGNED, SIGNATURE_LEN, FrameDecoder, FrameEncoder
+from mavconform.reference_impl.wire.dialect import mavlink
+from mavconform.reference_impl.wire.frame import DecodeError, Frame, SignatureVerdict
+from mavconform.reference_impl.wire.signing import SIGNING_EPOCH_UNIX, SigningKey, signing_timestamp
 
 T0 = 1_700_000_000.0  # 2023-11-14, a plain Unix time
 SECRET = bytes(range(1, 33))
