@@ -1,7 +1,9 @@
 """The run document: everything a run decided, as the canonical JSON the reports render.
 
 Format "mavconform-run/1" (reports/run_document.py checks it). It is built once, at the
-end of a run, from the results and the run's options; every report is a view of it.
+end of a run, from the results and the run's options; every report is a view of it. A run
+stopped by a signal says so (`run.interrupted`, where and by what) and its verdict is
+"interrupted": the clauses it did not reach are skipped, not passed.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from typing import Any
 from mavconform import __version__
 
 from .catalogue import BY_ID
+from .gating import verdict
 from .outcome import ClauseResult, Outcome
 from .runner import RunOutcome
 
@@ -44,11 +47,12 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
             "duration_s": round(run.duration_s, 3), "seed": options.seed,
             "time_scale": options.time_scale, "strict": options.strict, "clauses": options.clauses,
             "expectations": options.expectations, "baseline": options.baseline,
-            "forced_wait_s": round(run.forced_wait_s, 3),
+            "forced_wait_s": round(run.forced_wait_s, 3), "interrupted": run.interrupted,
+            "interrupted_at": run.interrupted_at, "interrupted_by": run.interrupted_by,
         },
         "identity": run.identity,
         "summary": {"total": len(run.results), **counts, "gating_failures": failing,
-                    "verdict": "fail" if failing else "pass"},
+                    "verdict": verdict(failing, interrupted=run.interrupted)},
         "gating": gating,
         "restore": run.restore,
         "capture": capture,

@@ -5,12 +5,17 @@ because the target went silent or a precondition broke). SHOULD failures fail th
 with `--strict`; MAY clauses never do (the behaviour is optional: a failure is reported,
 never gated on). A listed clause that fails in a way its expectation does not name stays a
 `fail`, with the expected failure beside it. With a baseline,
-only regressions fail it: a clause that passed in the baseline and now fails or errs.
+only regressions fail it: a clause that passed in the baseline and now fails or errs; a
+clause is "fixed" only if the baseline saw it fail (a skipped, not-applicable or undecided
+clause was never seen failing). An interrupted run is no baseline: the clauses it did not
+reach would look as if they had never passed, and hide their regressions.
 """
 
 from __future__ import annotations
 
 from typing import Any
+
+from mavconform.reference_impl.errors import UsageError
 
 from .catalogue import BY_ID
 from .clause import Level
@@ -18,6 +23,7 @@ from .expectations import OTHER_FAILURE_PREFIX, Deviation
 from .outcome import ClauseResult, Outcome
 
 NO_LONGER = "deviation no longer observed"
+PASS, FAIL, INTERRUPTED = "pass", "fail", "interrupted"   # the run's verdicts
 OTHER_FAILURE = OTHER_FAILURE_PREFIX
 
 
@@ -44,7 +50,16 @@ def gates(result: ClauseResult, *, strict: bool) -> bool:
     return level is Level.MUST or (strict and level is Level.SHOULD)
 
 
-def baseline_outcomes(doc: dict[str, Any]) -> dict[str, str]:
+FIXED_FROM = (Outcome.FAIL.value, Outcome.KNOWN_DEVIATION.value)   # seen failing before
+
+
+def baseline_outcomes(doc: dict[str, Any], source: str = "the baseline") -> dict[str, str]:
+    """Outcome by clause id of a checked run document; an interrupted run is refused."""
+    run = doc["run"]
+    if run.get("interrupted") or doc["summary"]["verdict"] == INTERRUPTED:
+        where = f" during {run['interrupted_at']}" if run.get("interrupted_at") else ""
+        raise UsageError(f"--baseline {source}: that run was interrupted{where}, so the clauses "
+                         "it did not decide would hide regressions; use a complete run")
     return {c["id"]: c["outcome"] for c in doc["clauses"]}
 
 
@@ -61,6 +76,14 @@ def gate(results: list[ClauseResult], *, strict: bool,
         flags[r.clause_id] = regressed
         if regressed:
             regressions.append(r.clause_id)
-        elif before is not None and before != "pass" and r.outcome is Outcome.PASS:
+        elif before in FIXED_FROM and r.outcome is Outcome.PASS:
             fixed.append(r.clause_id)
     return flags, {"mode": "baseline", "regressions": regressions, "fixed": fixed}
+
+
+def verdict(gating_failures: int, *, interrupted: bool) -> str:
+    """The run's verdict: an interrupted run neither passes nor fails, whatever it decided
+    before it stopped (it is not evidence that the rest would pass)."""
+    if interrupted:
+        return INTERRUPTED
+    return FAIL if gating_failures else PASS

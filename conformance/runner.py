@@ -7,14 +7,22 @@ arrive after it starts. Before the first clause the runner reads every plan the 
 holds; after the last it puts back any that changed, and says whether it could.
 A target that falls silent is reported, never waited on: once it has been silent past the
 liveness bound, the remaining clauses are marked `error` without being run.
+
+An interrupt (Ctrl-C, or SIGTERM under an `InterruptGuard`) stops the run where it is: the
+clause it cut short and every later one are `skipped`, the target is settled and its plans
+put back, and the outcome says where the run stopped. Under a guard, a second signal cannot
+cut the restore short: it is noted and honoured once the reports are written.
 """
 
 from __future__ import annotations
 
+import os
+import signal
+import threading
 import time
 import traceback
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
+from typing import Any, Callable, Iterable
 
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import MissionResult
@@ -41,51 +49,149 @@ class RunOutcome:
     forced_wait_s: float
     unresponsive: str | None = None     # why the target was given up on, if it was
     discovery_s: float = 0.0            # waiting for the first HEARTBEAT (the target's period)
-    interrupted: bool = False           # Ctrl-C: the remaining clauses were skipped
+    interrupted: bool = False           # a signal stopped it: the clauses not decided are skipped
+    interrupted_at: str | None = None   # the clause (or phase, e.g. "discovery") it stopped in
+    interrupted_by: str | None = None   # "SIGINT", "SIGTERM"
+    late_signal: str | None = None      # a signal that came while restoring or reporting, held back
     snapshot: dict[str, int] = field(default_factory=dict)
 
 
-def run_clauses(session: Session, clauses: Iterable[Clause], *,
-                on_result: OnResult | None = None, restore: bool = True) -> RunOutcome:
+class InterruptGuard:
+    """SIGINT/SIGTERM as a guarded run wants them: while the clauses run, the first one
+    raises KeyboardInterrupt (the run stops at the current clause); from then on, and from
+    `hold()` (putting the plans back, writing the reports), a signal is only noted, since
+    cutting those short would leave the target with the suite's plans and an unreadable
+    capture, and every wait in them is bounded anyway. The caller honours a noted signal
+    after the reports. `atomic` wraps a hook (the capture writer) that a signal must not
+    split. Signals can only be handled in the main thread: elsewhere the guard does nothing."""
+
+    def __init__(self, signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> None:
+        self.signals = signals
+        self.received: list[str] = []   # names, in order
+        self.holding = False
+        self._atomic = 0
+        self._pending = False
+        self._previous: dict[int, Any] = {}
+
+    def __enter__(self) -> "InterruptGuard":
+        if threading.current_thread() is threading.main_thread():
+            for signum in self.signals:
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for signum, previous in self._previous.items():
+            signal.signal(signum, previous)
+        self._previous.clear()
+
+    def hold(self) -> None:
+        """From now on signals are noted, never raised."""
+        self.holding = True
+
+    @property
+    def first(self) -> str | None:
+        return self.received[0] if self.received else None
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.received.append(signal.Signals(signum).name)
+        if self.holding:
+            _say("mavconform: putting the target's plans back and writing the reports first; "
+                 "stopping after that")
+        elif self._atomic:
+            self._pending = True
+        else:
+            self.holding = True     # one interrupt per run: a second must not cut the restore
+            raise KeyboardInterrupt
+
+    def atomic(self, hook: Callable[[Any], None]) -> Callable[[Any], None]:
+        def guarded(record: Any) -> None:
+            self._atomic += 1
+            try:
+                hook(record)
+            finally:
+                self._atomic -= 1
+            if self._pending and not self._atomic and not self.holding:
+                self._pending = False
+                self.holding = True
+                raise KeyboardInterrupt
+        return guarded
+
+
+def _say(line: str) -> None:
+    """One line on stderr from a signal handler: os.write, since print may be mid-line."""
+    try:
+        os.write(2, (line + "\n").encode())
+    except OSError:
+        pass
+
+
+def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnResult | None = None,
+                restore: bool = True, guard: InterruptGuard | None = None) -> RunOutcome:
     clauses = list(clauses)
     started = time.monotonic()
     results: list[ClauseResult] = []
-    try:
-        identity = session.discover()
-        discovered = time.monotonic() - started
-    except TargetUnresponsive as exc:
-        for clause in clauses:
-            result = ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}")
-            results.append(result)
-            if on_result:
-                on_result(clause, result)
-        return RunOutcome(results, None, {"status": "skipped", "detail": "the target never answered"},
-                          time.monotonic() - started, 0.0, unresponsive=str(exc))
-
-    snapshot = _snapshot(session) if restore else None
-    identity["prepared"] = readiness.prepare(session.t).line()
+    identity: dict | None = None
+    discovered = 0.0
+    snapshot: dict[MissionType, list[MissionItem]] | None = None
+    changed = False            # the run may have changed the target's plans
+    phase = "discovery"        # where an interrupt would land
     dead: str | None = None
     interrupted = False
-    for clause in clauses:
-        if dead is not None or interrupted:
-            result = (ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}") if dead is not None
-                      else ClauseResult(clause.id, Outcome.SKIPPED, "not run: interrupted by the user"))
-        else:
-            try:
-                result = run_one(session, clause)
-            except KeyboardInterrupt:   # stop, but still put the target back and report
-                interrupted = True
-                result = ClauseResult(clause.id, Outcome.SKIPPED, "interrupted by the user")
-            if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
-                if not _still_alive(session):
-                    dead = f"the target stopped answering during {clause.id}"
+
+    def record(clause: Clause, result: ClauseResult) -> None:
         results.append(result)
         if on_result:
             on_result(clause, result)
+
+    try:
+        try:
+            identity = session.discover()
+            discovered = time.monotonic() - started
+        except TargetUnresponsive as exc:
+            for clause in clauses:
+                record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
+            return RunOutcome(results, None, {"status": "skipped", "detail": "the target never answered"},
+                              time.monotonic() - started, 0.0, unresponsive=str(exc))
+        if restore:
+            phase = "reading the target's plans"
+            snapshot = _snapshot(session)
+        phase, changed = "preparing the target", True
+        identity["prepared"] = readiness.prepare(session.t).line()
+        for clause in clauses:
+            if dead is not None:
+                record(clause, ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}"))
+                continue
+            phase = clause.id
+            result = run_one(session, clause)
+            if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
+                if not _still_alive(session):
+                    dead = f"the target stopped answering during {clause.id}"
+            record(clause, result)
+    except KeyboardInterrupt:   # stop, but still put the target back and report
+        if guard is not None:
+            guard.hold()
+        interrupted = True
+    if guard is not None:
+        guard.hold()   # from here on a signal waits for the restore and the reports
+    how = guard.first if guard is not None else None
+    if interrupted:
+        by = f" ({how})" if how else ""
+        done = {r.clause_id for r in results}
+        for clause in clauses:
+            if clause.id in done:
+                continue
+            record(clause, ClauseResult(clause.id, Outcome.SKIPPED,
+                                        f"interrupted{by} while it ran: not decided" if clause.id == phase
+                                        else f"not run: the run was interrupted{by} during {phase}"))
+        if identity is not None:
+            _after_interrupt(session)
     if not restore:
         restore_status = {"status": "skipped", "detail": "not asked (--no-restore)"}
     elif dead is not None:
         restore_status = {"status": "skipped", "detail": "target unresponsive"}
+    elif not changed:
+        restore_status = {"status": "unchanged" if identity is not None else "skipped",
+                          "detail": f"interrupted during {phase}, before the run changed anything"}
     elif snapshot is None:
         restore_status = {"status": "failed", "detail": "could not read the target's mission before "
                           "the run, so what the run changed could not be put back"}
@@ -93,7 +199,33 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *,
         restore_status = _restore(session, snapshot)
     forced = sum(t.forced_wait for t in session.testers())
     return RunOutcome(results, identity, restore_status, time.monotonic() - started, forced,
-                      unresponsive=dead, discovery_s=discovered, interrupted=interrupted)
+                      unresponsive=dead, discovery_s=discovered, interrupted=interrupted,
+                      interrupted_at=phase if interrupted else None,
+                      interrupted_by=how if interrupted else None)
+
+
+def interrupted_before_start(clauses: Iterable[Clause], how: str | None,
+                             on_result: OnResult | None = None) -> RunOutcome:
+    """The outcome of a run stopped before its first datagram: every clause skipped."""
+    results = []
+    by = f" ({how})" if how else ""
+    for clause in clauses:
+        result = ClauseResult(clause.id, Outcome.SKIPPED,
+                              f"not run: the run was interrupted{by} before the target was contacted")
+        results.append(result)
+        if on_result:
+            on_result(clause, result)
+    return RunOutcome(results, None, {"status": "skipped", "detail": "interrupted before the target "
+                                      "was contacted"}, 0.0, 0.0, interrupted=True,
+                      interrupted_at="connecting", interrupted_by=how)
+
+
+def _after_interrupt(session: Session) -> None:
+    """Leave the target idle after a check (or a setup step) that was cut off mid-exchange:
+    stop recording into its exchange and cancel whatever it left open, as between clauses."""
+    for t in session.testers():
+        t.exchange = None
+    _settle(session, 0)
 
 
 def run_one(session: Session, clause: Clause) -> ClauseResult:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import signal
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +21,7 @@ from mavconform.reference_impl.net.capture import McapCapture
 from . import catalogue, document, expectations, gating
 from .clause import Clause
 from .outcome import ClauseResult
-from .runner import OnResult, RunOutcome, run_clauses
+from .runner import InterruptGuard, OnResult, RunOutcome, interrupted_before_start, run_clauses
 from .session import Session
 from .target_uri import TargetUri, parse_target
 
@@ -50,7 +51,7 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
     baseline = None
     if options.baseline:
         from mavconform.reports.run_document import load_run
-        baseline = gating.baseline_outcomes(load_run(options.baseline))
+        baseline = gating.baseline_outcomes(load_run(options.baseline), options.baseline)
     out = None
     if report_dir is not None:
         out = Path(report_dir)
@@ -62,8 +63,15 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
 
 
 def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = None,
-            restore: bool = True, on_result: OnResult | None = None) -> tuple[dict[str, Any], RunOutcome]:
-    """Run the prepared clauses; return the run document (reports written if asked)."""
+            restore: bool = True, on_result: OnResult | None = None,
+            stop_signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM),
+            ) -> tuple[dict[str, Any], RunOutcome]:
+    """Run the prepared clauses; return the run document (reports written if asked).
+
+    A `stop_signals` signal stops the run at the current clause (see `InterruptGuard`); the
+    target's plans are still put back and every report written, a second signal cannot cut
+    that short, and the outcome says it was interrupted (or, in `late_signal`, that a signal
+    came while that was being done)."""
     started = dt.datetime.now(dt.timezone.utc)
     if p.expected:
         # Judge each result against the expectations as it comes, so the live line already
@@ -74,24 +82,33 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
             gating.apply_expectations([result], p.expected)
             if shown is not None:
                 shown(clause, result)
-    capture = None
-    if p.report_dir is not None:
-        capture = McapCapture(p.report_dir / CAPTURE_NAME)
-    try:
-        with Session(p.uri, scale=p.options.time_scale, virtual=virtual, seed=p.options.seed,
-                     allow_flight=allow_flight, capture=capture) as session:
-            run = run_clauses(session, p.clauses, on_result=on_result, restore=restore)
-            if session.guard is not None and session.guard.crash:
-                run.restore = {**run.restore, "detail": run.restore["detail"]
-                               + f"; the in-process vehicle crashed: {session.guard.crash}"}
-    finally:
-        if capture is not None:
-            capture.close()
-    gating.apply_expectations(run.results, p.expected)
-    flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
-    doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
-                         capture=CAPTURE_NAME if capture is not None else None)
-    if p.report_dir is not None:
-        from mavconform.reports.write import write_reports
-        write_reports(doc, p.report_dir)
+    with InterruptGuard(stop_signals) as guard:
+        capture = None
+        if p.report_dir is not None:
+            capture = McapCapture(p.report_dir / CAPTURE_NAME)
+        try:
+            try:
+                with Session(p.uri, scale=p.options.time_scale, virtual=virtual, seed=p.options.seed,
+                             allow_flight=allow_flight,
+                             capture=guard.atomic(capture) if capture is not None else None) as session:
+                    run = run_clauses(session, p.clauses, on_result=on_result, restore=restore, guard=guard)
+                    if session.guard is not None and session.guard.crash:
+                        run.restore = {**run.restore, "detail": run.restore["detail"]
+                                       + f"; the in-process vehicle crashed: {session.guard.crash}"}
+            except KeyboardInterrupt:   # before the session was open: nothing was sent
+                guard.hold()
+                run = interrupted_before_start(p.clauses, guard.first, on_result)
+        finally:
+            guard.hold()
+            if capture is not None:
+                capture.close()
+        gating.apply_expectations(run.results, p.expected)
+        flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
+        doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
+                             capture=CAPTURE_NAME if capture is not None else None)
+        if p.report_dir is not None:
+            from mavconform.reports.write import write_reports
+            write_reports(doc, p.report_dir)
+    if guard.received and not run.interrupted:
+        run.late_signal = guard.first
     return doc, run

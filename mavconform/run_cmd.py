@@ -7,7 +7,15 @@ run.html and run.mcap to the report folder.
 Exit codes: 0 every clause passed or is a known deviation (SHOULD failures count only with
 --strict); 1 a clause failed unexpectedly, could not be decided, or the target did not
 answer (with --baseline: only a clause that passed in the baseline and does not now);
-2 a usage mistake.
+2 a usage mistake; 130 interrupted.
+
+Interrupted (Ctrl-C, or SIGTERM as CI cancel, `timeout` and `docker stop` send): the run
+stops at the current clause, puts the target's plans back and writes every report, and
+exits 130 for either signal (128 + SIGINT: "stopped on request, reports written", where a
+143 would read as "killed"). run.json then says `run.interrupted: true`, where, and the
+verdict "interrupted"; such a run is refused as --baseline. A second signal cannot cut the
+restore or the reports short: it is honoured after them. A signal that comes after the
+last clause, while the plans are put back, leaves the run complete, but still exits 130.
 """
 
 from __future__ import annotations
@@ -22,7 +30,7 @@ from mavconform.conformance.clause import Clause
 from mavconform.conformance.outcome import ClauseResult, Outcome
 from mavconform.conformance.target_uri import FORMS
 
-from .options import time_scale
+from .options import sigterm_as_interrupt, time_scale
 
 MARK = {Outcome.PASS: "PASS", Outcome.FAIL: "FAIL", Outcome.KNOWN_DEVIATION: "KNOWN",
         Outcome.NOT_APPLICABLE: "N/A", Outcome.SKIPPED: "SKIP", Outcome.ERROR: "ERROR"}
@@ -41,7 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--expect", metavar="NAME|FILE",
                    help="expectations file (or bundled name) listing known deviations")
     p.add_argument("--baseline", metavar="RUN.json",
-                   help="fail only on regressions: clauses that passed in this earlier run.json")
+                   help="fail only on regressions: clauses that passed in this earlier run.json "
+                        "(a complete run: an interrupted one is refused)")
     p.add_argument("--report-dir", default="reports/out", metavar="DIR",
                    help="where the reports go (default reports/out)")
     p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
@@ -55,23 +64,36 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
+EXIT_INTERRUPTED = 130
+
+
 def run(args: argparse.Namespace) -> int:
-    options = document.RunOptions(target=args.target, clauses=args.clauses, strict=args.strict,
-                                  time_scale=args.time_scale, seed=args.seed,
-                                  expectations=args.expect, baseline=args.baseline)
-    prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
-    print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
-    on_result = None if args.quiet else _printer()
-    allow = True if args.allow_flight else None
-    doc, run_outcome = suite.execute(prepared, allow_flight=allow, restore=not args.no_restore,
+    """Exit 130 on SIGINT or SIGTERM, once the plans are back and the reports written (see
+    the module docstring); SIGTERM before or after the run raises KeyboardInterrupt, which
+    the command line also turns into 130."""
+    with sigterm_as_interrupt():
+        options = document.RunOptions(target=args.target, clauses=args.clauses, strict=args.strict,
+                                      time_scale=args.time_scale, seed=args.seed,
+                                      expectations=args.expect, baseline=args.baseline)
+        prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
+        print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
+        on_result = None if args.quiet else _printer()
+        allow = True if args.allow_flight else None
+        doc, outcome = suite.execute(prepared, allow_flight=allow, restore=not args.no_restore,
                                      on_result=on_result)
-    if run_outcome.unresponsive and run_outcome.identity is None:
-        print(f"mavconform: target unresponsive: {run_outcome.unresponsive}", file=sys.stderr)
-    _summary(doc, args.report_dir)
-    if run_outcome.interrupted:
-        print("mavconform: interrupted; the clauses not run are marked skipped", file=sys.stderr)
-        return 130
-    return 0 if doc["summary"]["verdict"] == "pass" else 1
+        if outcome.unresponsive and outcome.identity is None:
+            print(f"mavconform: target unresponsive: {outcome.unresponsive}", file=sys.stderr)
+        _summary(doc, args.report_dir)
+        if outcome.interrupted:
+            by = f" by {outcome.interrupted_by}" if outcome.interrupted_by else ""
+            print(f"mavconform: interrupted{by} during {outcome.interrupted_at}; the clauses not "
+                  f"decided are marked skipped; plans: {doc['restore']['status']}", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        if outcome.late_signal:
+            print(f"mavconform: {outcome.late_signal} came after the last clause; the plans were put "
+                  "back and the reports written first", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        return 0 if doc["summary"]["verdict"] == "pass" else 1
 
 
 def _printer():

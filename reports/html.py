@@ -15,7 +15,7 @@ from urllib.parse import quote
 
 from mavconform.reports.run_document import PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
-from mavconform.reports.text import clean, one_line, run_facts
+from mavconform.reports.text import clean, interruption, one_line, run_facts, verdict_headline
 
 OUTCOME_COLOURS = {"pass": "#1a7f37", "fail": "#cf222e", "known-deviation": "#9a6700",
                    "not-applicable": "#6e7781", "skipped": "#57606a", "error": "#8250df"}
@@ -26,6 +26,9 @@ body { font: 15px/1.45 system-ui, sans-serif; margin: 0 auto; max-width: 1200px;
 h1 { margin-bottom: .2em; } h2 { border-bottom: 1px solid #d0d7de; padding-bottom: .2em; }
 .verdict { font-size: 1.6em; font-weight: 700; }
 .verdict.pass { color: #1a7f37; } .verdict.fail { color: #cf222e; }
+.verdict.interrupted { color: #9a6700; }
+p.interrupted { background: #fff8c5; border: 1px solid #d4a72c; border-radius: 4px;
+                padding: .5em 1em; font-weight: 600; }
 table { border-collapse: collapse; margin: .5em 0; }
 th, td { border: 1px solid #d0d7de; padding: .25em .6em; text-align: left; vertical-align: top; }
 table.facts th { background: #f6f8fa; font-weight: 600; }
@@ -64,15 +67,18 @@ def html_report(doc: dict[str, Any]) -> str:
     summary, clauses = doc["summary"], doc["clauses"]
     verdict = summary["verdict"]
     target = one_line(doc["run"]["target"])
-    headline = f"{'✅ PASS' if verdict == 'pass' else '❌ FAIL'}"
+    headline = verdict_headline(verdict)
     out = ["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
            '<meta name="viewport" content="width=device-width, initial-scale=1">',
            f"<title>{escape(headline)}: mavconform against {escape(target)}</title>",
            f"<style>{CSS}</style>", "</head>", "<body>",
            f"<h1>mavconform against <code>{escape(target)}</code></h1>",
-           f'<p class="verdict {"pass" if verdict == "pass" else "fail"}">{headline} '
+           f'<p class="verdict {escape(verdict)}">{headline} '
            f'<small>({summary["gating_failures"]} gating failure'
            f'{"" if summary["gating_failures"] == 1 else "s"})</small></p>']
+    stopped = interruption(doc)
+    if stopped is not None:
+        out.append(f'<p class="interrupted">{escape(stopped)}</p>')
     out += _facts(doc)
     out += _counts(clauses)
     out += _gating(doc)

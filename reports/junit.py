@@ -3,7 +3,8 @@
 CI tools (GitLab, Jenkins, GitHub test-reporter actions) read this dialect of JUnit: one
 <testcase> per clause, <failure>/<error>/<skipped> children, counts on <testsuite>. A known
 deviation passes (the expectations file accepted it) but says so in <system-out>, so it
-stays visible. Text from the target is cleaned: XML 1.0 cannot carry control characters.
+stays visible; an interrupted run says so in the suite's <system-err>. Text from the target
+is cleaned: XML 1.0 cannot carry control characters.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any
 from mavconform.reports.run_document import (
     ERROR, FAIL, KNOWN_DEVIATION, NOT_APPLICABLE, SKIPPED, outcome_counts,
 )
-from mavconform.reports.text import clean, exchange_lines, one_line, value_text
+from mavconform.reports.text import clean, exchange_lines, interruption, one_line, value_text
 
 SUITE_NAME = "mavconform"
 MESSAGE_LIMIT = 500  # characters in a message attribute (CI tools show it as a headline)
@@ -37,6 +38,9 @@ def junit_xml(doc: dict[str, Any]) -> str:
         ET.SubElement(properties, "property", {"name": clean(name), "value": one_line(value)})
     for clause in doc["clauses"]:
         _testcase(suite, clause)
+    stopped = interruption(doc)
+    if stopped is not None:   # the counts alone would read as a clean run with skips
+        ET.SubElement(suite, "system-err").text = stopped + "\n"
     ET.indent(suite)
     return ('<?xml version="1.0" encoding="UTF-8"?>\n'
             + ET.tostring(suite, encoding="unicode") + "\n")

@@ -1,8 +1,9 @@
 """Markdown summary, sized for a GitHub job summary or a pull-request comment.
 
-Verdict first, then what did not pass, since that is what a reviewer acts on; the full
-clause matrix is folded away in <details>. GitHub renders inline HTML, so text from the
-target is escaped for Markdown *and* HTML: it cannot open a tag, break a table or a line.
+Verdict first (for an interrupted run, that it was cut short), then what did not pass, since
+that is what a reviewer acts on; the full clause matrix is folded away in <details>. GitHub
+renders inline HTML, so text from the target is escaped for Markdown *and* HTML: it cannot
+open a tag, break a table or a line.
 """
 
 from __future__ import annotations
@@ -12,7 +13,8 @@ from typing import Any
 from urllib.parse import quote
 
 from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
-from mavconform.reports.text import document_identity, one_line, seconds
+from mavconform.reports.text import (document_identity, interruption, one_line, seconds,
+                                     verdict_headline)
 
 DETAIL_LIMIT = 200  # characters of detail per table cell
 
@@ -32,8 +34,7 @@ def md(text: str, limit: int | None = None) -> str:
 def markdown_summary(doc: dict[str, Any]) -> str:
     """The run as a Markdown document (GitHub flavour), ending with a newline."""
     summary, clauses = doc["summary"], doc["clauses"]
-    passed = summary["verdict"] == "pass"
-    out = [f"## {'✅ PASS' if passed else '❌ FAIL'}: {md(doc['run']['target'])} "
+    out = [f"## {verdict_headline(summary['verdict'])}: {md(doc['run']['target'])} "
            f"({md(document_identity(doc))}), "
            f"{md(doc['tool']['name'])} {md(doc['tool']['version'])}",
            "",
@@ -41,6 +42,9 @@ def markdown_summary(doc: dict[str, Any]) -> str:
            f"gating mode {md(doc['gating']['mode'])}: {summary['gating_failures']} gating "
            f"failure{'' if summary['gating_failures'] == 1 else 's'}.",
            ""]
+    stopped = interruption(doc)
+    if stopped is not None:
+        out += [f"> **{md(stopped)}**", ""]
     restore = doc["restore"]
     restore_line = f"Target plans after the run: **{md(restore['status'])}**"
     if restore["detail"]:

@@ -9,9 +9,10 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
 
     format    "mavconform-run/1"
     tool      {name, version}
-    run       {target, started, duration_s, ...scalars: seed, time_scale, strict, ...}
+    run       {target, started, duration_s, ...scalars: seed, time_scale, strict, ...,
+               [interrupted: bool, interrupted_at: clause id or phase, interrupted_by: SIGTERM]}
     identity  {system, component, [type, autopilot, mavlink_version, address]} or null
-    summary   {total, <one count per outcome>, gating_failures, verdict: pass|fail}
+    summary   {total, <one count per outcome>, gating_failures, verdict: pass|fail|interrupted}
     gating    {mode: strict|default|baseline, regressions: [id], fixed: [id]}
     restore   {status: restored|unchanged|failed|skipped, detail}
     capture   file name of the MCAP capture, or null
@@ -19,7 +20,9 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
                 detail, expectation, duration_s,
                 exchange: [{t, dir: tx|rx|note, peer, msg, fields: {name: scalar}}]}]
 
-The summary counts must agree with the clauses, so no report shows two different totals.
+The summary counts must agree with the clauses, so no report shows two different totals,
+and a run marked interrupted cannot have the verdict "pass" (what it did not reach is not
+known to pass).
 """
 
 from __future__ import annotations
@@ -42,7 +45,8 @@ SKIPPED = "skipped"
 ERROR = "error"
 OUTCOMES = (PASS, FAIL, KNOWN_DEVIATION, NOT_APPLICABLE, SKIPPED, ERROR)  # display order
 
-VERDICTS = ("pass", "fail")
+INTERRUPTED = "interrupted"   # the verdict of a run a signal stopped: neither pass nor fail
+VERDICTS = ("pass", "fail", INTERRUPTED)
 LEVELS = ("MUST", "SHOULD", "MAY")
 GATING_MODES = ("strict", "default", "baseline")
 RESTORE_STATUSES = ("restored", "unchanged", "failed", "skipped")
@@ -54,7 +58,9 @@ DIRECTIONS = (TX, RX, NOTE)
 RUN_REQUIRED = {"target": ("string",), "started": ("string",), "duration_s": ("number",)}
 RUN_KNOWN = {"seed": ("integer", "null"), "time_scale": ("number",), "strict": ("bool",),
              "clauses": ("string",), "expectations": ("string", "null"),
-             "baseline": ("string", "null"), "forced_wait_s": ("number", "null")}
+             "baseline": ("string", "null"), "forced_wait_s": ("number", "null"),
+             "interrupted": ("bool",), "interrupted_at": ("string", "null"),
+             "interrupted_by": ("string", "null")}
 IDENTITY_KNOWN = {"type": ("integer",), "autopilot": ("integer",),
                   "mavlink_version": ("integer",), "address": ("string", "null")}
 SCALAR = ("string", "number", "bool", "null")
@@ -250,6 +256,9 @@ class _Checker:
                                                   f"clauses[{first_index[clause_id]}]")
             first_index[clause_id] = index
         self.summary(self.key(doc, "summary", "", "object"), clauses)
+        if doc["run"].get("interrupted") and doc["summary"]["verdict"] == PASS:
+            self.fail("summary.verdict", "'pass', but run.interrupted is true: an interrupted "
+                                         "run is not known to pass")
 
     def run(self, run: dict) -> None:
         for key, kinds in RUN_REQUIRED.items():

@@ -117,6 +117,25 @@ def seconds(value: float) -> str:
     return f"{value:.3f} s" if value < 10 else f"{value:.1f} s"
 
 
+VERDICT_HEADLINES = {"pass": "✅ PASS", "fail": "❌ FAIL", "interrupted": "⏹️ INTERRUPTED"}
+
+
+def verdict_headline(verdict: str) -> str:
+    """"✅ PASS", "❌ FAIL" or "⏹️ INTERRUPTED", for a report's first line."""
+    return VERDICT_HEADLINES[verdict]
+
+
+def interruption(doc: dict[str, Any]) -> str | None:
+    """What the reports say first about a run a signal stopped (None for a complete run)."""
+    run = doc["run"]
+    if not run.get("interrupted") and doc["summary"]["verdict"] != "interrupted":
+        return None
+    by = f" by {run['interrupted_by']}" if run.get("interrupted_by") else ""
+    at = f" during {run['interrupted_at']}" if run.get("interrupted_at") else ""
+    return one_line(f"The run was interrupted{by}{at}: it is not a complete result (what it did "
+                    "not reach was not checked), and it cannot serve as a --baseline.")
+
+
 def run_facts(doc: dict[str, Any]) -> list[tuple[str, str]]:
     """(label, value) pairs describing the run, known keys first, for the report headers."""
     run = doc["run"]
@@ -126,8 +145,9 @@ def run_facts(doc: dict[str, Any]) -> list[tuple[str, str]]:
     labels = {"seed": "seed", "time_scale": "time scale", "strict": "strict",
               "clauses": "clauses selected", "expectations": "expectations file",
               "baseline": "baseline", "forced_wait_s": "forced waits"}
+    shown_apart = ("target", "started", "duration_s", "interrupted", "interrupted_at", "interrupted_by")
     extra = [key for key in labels if key in run] + sorted(
-        key for key in run if key not in labels and key not in ("target", "started", "duration_s"))
+        key for key in run if key not in labels and key not in shown_apart)
     for key in extra:
         value = run[key]
         if value is None:
@@ -141,6 +161,10 @@ def run_facts(doc: dict[str, Any]) -> list[tuple[str, str]]:
     for key, label in (("stored_form", "plans compared as"), ("prepared", "target prepared")):
         if identity.get(key):
             facts.append((label, identity[key]))
+    if run.get("interrupted"):
+        facts.append(("interrupted", " ".join(
+            ["yes"] + ([f"by {run['interrupted_by']}"] if run.get("interrupted_by") else [])
+            + ([f"during {run['interrupted_at']}"] if run.get("interrupted_at") else []))))
     gating = doc["gating"]
     facts.append(("gating", gating["mode"]))
     restore = doc["restore"]
