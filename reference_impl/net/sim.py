@@ -33,13 +33,16 @@ _INF = math.inf
 @dataclass(frozen=True, slots=True)
 class CaptureRecord:
     """One datagram event on a link. kind: 'tx' (a node sent it), 'rx' (delivered to the
-    destination), 'drop' (the fault model dropped it, or there was no route)."""
+    destination), 'drop' (the fault model dropped it, or there was no route). `wall`: the
+    driver clock's `wall()` then (Unix seconds; under SimClock a fixed epoch plus virtual
+    time, so it repeats), for captures' timestamps; None from a producer without one."""
 
     time: float
     src: Address
     dst: Address
     data: bytes
     kind: str
+    wall: float | None = None
 
 
 CaptureHook = Callable[[CaptureRecord], None]
@@ -159,7 +162,7 @@ class SimNetwork:
                 _, _, link, data = heappop(heap)
                 link.stats.delivered += 1
                 if hooks:
-                    rec = CaptureRecord(now, link.src, link.dst, data, "rx")
+                    rec = CaptureRecord(now, link.src, link.dst, data, "rx", clock.wall())
                     for hook in hooks:
                         hook(rec)
                 node = link.node
@@ -225,7 +228,7 @@ class SimNetwork:
                 heappush(heap, (now + delay, next(tiebreak), link, payload))
 
     def _emit(self, now: float, src: Address, dst: Address, data: bytes, kind: str) -> None:
-        rec = CaptureRecord(now, src, dst, data, kind)
+        rec = CaptureRecord(now, src, dst, data, kind, self.clock.wall())
         for hook in self._hooks:
             hook(rec)
 

@@ -176,7 +176,7 @@ class UdpDriver:
         return stats
 
     def _emit(self, now: float, src: Address, dst: Address, data: bytes, kind: str) -> None:
-        rec = CaptureRecord(now, src, dst, data, kind)
+        rec = CaptureRecord(now, src, dst, data, kind, self.clock.wall())
         for hook in self._hooks:
             hook(rec)
 
