@@ -103,18 +103,28 @@ class InterruptGuard:
             self.holding = True     # one interrupt per run: a second must not cut the restore
             raise KeyboardInterrupt
 
-    def atomic(self, hook: Callable[[Any], None]) -> Callable[[Any], None]:
-        def guarded(record: Any) -> None:
+    def atomic(self, hook: Callable[..., None]) -> Callable[..., None]:
+        def guarded(*args: Any, **kwargs: Any) -> None:
             self._atomic += 1
             try:
-                hook(record)
+                hook(*args, **kwargs)
             finally:
                 self._atomic -= 1
             if self._pending and not self._atomic and not self.holding:
                 self._pending = False
                 self.holding = True
                 raise KeyboardInterrupt
+        mark = getattr(hook, "mark", None)
+        if mark is not None:   # the capture's clause markers are writes too
+            guarded.mark = self.atomic(mark)  # type: ignore[attr-defined]
         return guarded
+
+
+def _mark(session: Session, label: str, level: str = "info") -> None:
+    """A marker in the run's capture (a Foxglove Log line), at the session clock's time."""
+    mark = getattr(session.capture, "mark", None)
+    if mark is not None:
+        mark(label, clock=session.driver.clock, level=level)
 
 
 def _say(line: str) -> None:
@@ -242,6 +252,7 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     begin = session.t.now()
     began_at = len(session.t.node.inbox)
     session.current_clause = clause.id
+    _mark(session, f"clause {clause.id}")
     try:
         outcome, detail = Outcome.PASS, fn(session) or ""
     except ClauseFailed as exc:
@@ -270,6 +281,7 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     for t in session.testers():
         t.exchange = None
     _settle(session, began_at)
+    _mark(session, f"clause {clause.id}: {outcome.value}", "info" if outcome is Outcome.PASS else "warning")
     return ClauseResult(clause.id, outcome, detail, round(end - begin, 6), events)
 
 

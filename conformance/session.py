@@ -106,6 +106,7 @@ class Session:
         if shared_link is None:
             shared_link = self.vehicle.config.single_peer_link if self.vehicle is not None else True
         self.shared_link = shared_link
+        self.capture = capture   # its `mark`, if it has one, labels where each clause starts
         if capture is not None:
             self.driver.add_capture(capture)
         self.t = Tester(node, self.driver, scale=scale)

@@ -36,6 +36,21 @@ def test_run_against_builtin_writes_all_five_reports(tmp_path, capsys) -> None:
     assert "verdict: PASS" in out and "PASS  MIS.UP.01" in out
 
 
+def test_the_capture_marks_where_each_clause_starts_and_how_it_ended(tmp_path, capsys) -> None:
+    from mcap.reader import make_reader
+    code, out, _ = _run(capsys, "run", "--target", "mutant:no-final-ack", "--clauses", "MIS.UP.01,MIS.UP.03",
+                        "--report-dir", str(tmp_path))
+    assert code == 1, out
+    with open(tmp_path / "run.mcap", "rb") as f:
+        marks = [(json.loads(msg.data)["message"], json.loads(msg.data)["level"], msg.log_time)
+                 for _, channel, msg in make_reader(f).iter_messages() if channel.topic == "markers"]
+    outcome = {c["id"]: c["outcome"] for c in json.loads((tmp_path / "run.json").read_text())["clauses"]}
+    assert [m for m, _, _ in marks] == ["clause MIS.UP.01", f"clause MIS.UP.01: {outcome['MIS.UP.01']}",
+                                        "clause MIS.UP.03", f"clause MIS.UP.03: {outcome['MIS.UP.03']}"]
+    assert outcome["MIS.UP.03"] != "pass" and marks[3][1] != marks[1][1]
+    assert [t for _, _, t in marks] == sorted(t for _, _, t in marks)
+
+
 def test_mutant_fails_the_run_and_baseline_gates_only_regressions(tmp_path, capsys) -> None:
     spec_dir, mut_dir = tmp_path / "spec", tmp_path / "mut"
     clauses = "MIS.UP.1[56]"
