@@ -5,7 +5,8 @@ where mavconform is installed; it only adds options until `--mavlink-target` is 
 imports the suite lazily. Each clause is one test named by its id; pass/fail map to pytest's,
 not-applicable and skipped to skips, known deviations to xfail, and an undecided clause
 (target unresponsive, precondition) to a failure saying so. `--mavlink-report-dir` writes
-the same reports as `mavconform run`.
+the same reports as `mavconform run`. A usage mistake is pytest's usage error (exit 4),
+one line naming the option, as `mavconform run` names it.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ _STATE: dict[str, Any] = {}
 def pytest_addoption(parser: pytest.Parser) -> None:
     g = parser.getgroup("mavconform", "MAVLink mission conformance (mavconform)")
     g.addoption("--mavlink-target", metavar="URI",
-                help="run the conformance clauses against URI (builtin:spec, udp:HOST:PORT, udpin:PORT)")
+                help="run the conformance clauses against URI (builtin:spec|px4|ardupilot, mutant:NAME, "
+                     "udp:HOST:PORT or udpin:[HOST:]PORT)")
     g.addoption("--mavlink-clauses", default="*", metavar="GLOB", help="clause id globs (default all)")
     g.addoption("--mavlink-strict", action="store_true", help="SHOULD failures fail too")
     g.addoption("--mavlink-expect", metavar="NAME|FILE", help="expectations file of known deviations")
@@ -39,6 +41,11 @@ def _prepared(config: pytest.Config):
         from mavconform.reference_impl.errors import UsageError
 
         from . import document, suite
+        from .target_uri import parse_target
+        try:   # first, alone, so its line names the option
+            parse_target(config.getoption("--mavlink-target"))
+        except UsageError as exc:
+            raise pytest.UsageError(f"--mavlink-target: {exc}") from None
         options = document.RunOptions(
             target=config.getoption("--mavlink-target"), clauses=config.getoption("--mavlink-clauses"),
             strict=config.getoption("--mavlink-strict"), time_scale=config.getoption("--mavlink-time-scale"),
@@ -90,7 +97,7 @@ def mavlink_session(request: pytest.FixtureRequest):
     except UsageError as exc:   # e.g. udpin: on an address we cannot bind
         if capture is not None:
             capture.close()
-        pytest.exit(f"mavconform: error: {exc}", returncode=pytest.ExitCode.USAGE_ERROR)
+        pytest.exit(f"--mavlink-target: {exc}", returncode=pytest.ExitCode.USAGE_ERROR)
     started = dt.datetime.now(dt.timezone.utc)
     results: list = []
     _STATE["results"] = results

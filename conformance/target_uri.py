@@ -8,6 +8,8 @@
 - `udp:HOST:PORT`      a target listening at HOST:PORT; we send first (our HEARTBEAT);
 - `udpin:[HOST:]PORT`  we listen at HOST:PORT (default host 127.0.0.1) and the target sends
                        to us first, as SITL does.
+The UDP forms are parsed by reference_impl.net.uri, the one parser every command's and
+plugin's addresses go through, so `run`, `fuzz`, `gcs`, `vehicle` and `proxy` agree.
 A bad URI is the user's mistake: one `UsageError` line quoting it.
 """
 
@@ -16,10 +18,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mavconform.reference_impl.errors import UsageError
-from mavconform.reference_impl.net.uri import UdpUri, parse_udp_uri
+from mavconform.reference_impl.net.uri import (FORMS as UDP_FORMS, SCHEMES as UDP_SCHEMES, UdpUri,
+                                                parse_udp_uri)
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES
 
-FORMS = "builtin:spec|px4|ardupilot, mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT"
+FORMS = f"builtin:spec|px4|ardupilot, mutant:NAME, {UDP_FORMS}"
 
 
 @dataclass(frozen=True)
@@ -37,6 +40,7 @@ class TargetUri:
 
 
 def parse_target(text: str) -> TargetUri:
+    """builtin: and mutant: here; udp: and udpin: by the one UDP address parser."""
     raw = text.strip()
     scheme, sep, rest = raw.partition(":")
     scheme = scheme.lower()
@@ -53,10 +57,7 @@ def parse_target(text: str) -> TargetUri:
             raise UsageError(f"bad target {text!r}: unknown mutant {rest!r} "
                              "(list them with `mavconform clauses --mutants`)")
         return TargetUri("mutant", rest)
-    if scheme == "udp":
-        return TargetUri("udp", udp=parse_udp_uri(raw))
-    if scheme == "udpin":
-        if rest.isdigit():
-            raw = f"udpin:127.0.0.1:{rest}"
-        return TargetUri("udpin", udp=parse_udp_uri(raw, listen=True))
+    if scheme in UDP_SCHEMES:
+        udp = parse_udp_uri(raw)
+        return TargetUri(udp.mode, udp=udp)
     raise UsageError(f"bad target {text!r}: unknown scheme {scheme!r} (expected {FORMS})")

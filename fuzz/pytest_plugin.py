@@ -10,6 +10,7 @@ directory by default; Hypothesis's directory database is safe for concurrent pro
 an example one worker found is tried first by every later run. For machines that do not
 share a disk, `--fuzz-database redis://HOST:PORT` shares it through Redis.
 A shard with a finding fails, naming the broken invariant and the saved case to replay.
+A usage mistake is pytest's usage error (exit 4), one line naming the option.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ import pytest
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     g = parser.getgroup("mavconform-fuzz", "MAVLink mission fuzz campaigns (mavconform)")
-    g.addoption("--fuzz-target", metavar="URI", help="fuzz URI (builtin:spec, mutant:NAME, udp:..., udpin:...)")
+    g.addoption("--fuzz-target", metavar="URI",
+                help="fuzz URI (builtin:spec|px4|ardupilot, mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT)")
     g.addoption("--fuzz-mode", default="protocol,frames", metavar="MODES",
                 help="comma-separated modes (default protocol,frames)")
     g.addoption("--fuzz-shards", type=int, default=2, metavar="N", help="shards per mode (default 2)")
@@ -45,14 +47,20 @@ def _settings(config: pytest.Config) -> dict[str, Any]:
     shards, examples = config.getoption("--fuzz-shards"), config.getoption("--fuzz-examples")
     if shards < 1 or examples < 1:
         raise pytest.UsageError("--fuzz-shards and --fuzz-examples must be at least 1")
-    time_text = config.getoption("--fuzz-time")
+    from mavconform.conformance.target_uri import parse_target
+    from mavconform.fuzz_cmd import open_database
+
+    def checked(option: str, parse: Any) -> Any:
+        try:
+            return parse(config.getoption(option))
+        except UsageError as exc:
+            raise pytest.UsageError(f"{option}: {exc}") from None
+
+    checked("--fuzz-target", parse_target)
+    time_s = checked("--fuzz-time", lambda text: parse_duration(text) if text else None)
     try:
-        from mavconform.conformance.target_uri import parse_target
-        parse_target(config.getoption("--fuzz-target"))
-        time_s = parse_duration(time_text) if time_text else None
-        from mavconform.fuzz_cmd import open_database
         open_database(config.getoption("--fuzz-database"))
-    except UsageError as exc:
+    except UsageError as exc:   # its message names the option (as the CLI spells it)
         raise pytest.UsageError(str(exc)) from None
     return {"modes": modes, "shards": shards, "examples": examples, "time_s": time_s}
 

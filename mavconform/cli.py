@@ -2,6 +2,10 @@
 
 Exit codes: 0 success, 1 a finding (an operation failed, a target did not answer),
 2 a usage mistake (bad option, URI or file), with one line saying what and where.
+Every usage mistake, whether argparse or a command finds it, is one stderr line starting
+with ERROR_PREFIX, so scripts and people look for one thing; argparse's lines then name the
+subcommand whose parser refused ("mavconform: error: gcs upload: the following arguments
+are required: --target"), as its messages do not say which command they are about.
 """
 
 from __future__ import annotations
@@ -15,11 +19,13 @@ from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, fuzz_cmd, gc
                proxy_cmd, report_cmd, run_cmd, vehicle_cmd)
 
 EXIT_USAGE = 2
+ERROR_PREFIX = "mavconform: error: "
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2 (argparse's own convention)
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+        command = self.prog.partition(" ")[2]   # "mavconform gcs upload" -> "gcs upload"
+        self.exit(EXIT_USAGE, f"{ERROR_PREFIX}{command + ': ' if command else ''}{message}\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -49,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.run(args)
     except UsageError as exc:
-        print(f"mavconform: error: {exc}", file=sys.stderr)
+        print(f"{ERROR_PREFIX}{exc}", file=sys.stderr)
         return EXIT_USAGE
     except LocalProtocolError as exc:  # our bug, not the user's nor the target's
         print(f"mavconform: internal error (please report it): {exc}", file=sys.stderr)

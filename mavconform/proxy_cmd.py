@@ -10,6 +10,7 @@ import sys
 from mavconform.fuzz.proxy import DOWN, MAX_LEGS, UP, ChaosProxy, UdpProxy
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net import LinkStats, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
+from mavconform.reference_impl.net.uri import FORMS
 
 from .options import add_fault_options, capture_to, describe_faults, fault_model, positive, sigterm_as_interrupt
 
@@ -47,9 +48,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=DESCRIPTION, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--listen", required=True, metavar="URI",
-                   help="where GCSs send to: udp:HOST:PORT (port 0: any free port, printed)")
+                   help=f"where GCSs send to: {FORMS} (either scheme: the proxy listens; "
+                        "port 0: any free port, printed)")
     p.add_argument("--forward", required=True, metavar="URI",
-                   help="the vehicle, listening at udp:HOST:PORT")
+                   help="the vehicle, listening at udp:HOST:PORT (the proxy sends first, so not udpin:)")
     p.add_argument("--only", choices=(UP, DOWN),
                    help="faults on one direction only: up (GCS -> vehicle) or down (vehicle -> GCS)")
     p.add_argument("--max-gcs", type=_max_gcs, default=MAX_LEGS, metavar="N",
@@ -66,8 +68,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    listen = _endpoint("--listen", args.listen, listen=True)
-    forward = _vehicle_address(_endpoint("--forward", args.forward))
+    listen = parse_udp_uri(args.listen, role="listen", option="--listen")
+    forward = _vehicle_address(parse_udp_uri(args.forward, role="peer", option="--forward"))
     faults = fault_model(args)
     up = faults if args.only in (None, UP) else None
     down = (faults.copy() if faults is not None else None) if args.only in (None, DOWN) else None
@@ -129,17 +131,6 @@ def _print_stats(proxy: ChaosProxy, driver: UdpDriver, node: UdpProxy) -> None:
 def _counts(s: LinkStats) -> str:
     return (f"in {s.sent}, out {s.delivered}, dropped {s.dropped}, duplicated {s.duplicated}, "
             f"reordered {s.reordered}, corrupted {s.corrupted}")
-
-
-def _endpoint(option: str, text: str, *, listen: bool = False) -> UdpUri:
-    try:
-        uri = parse_udp_uri(text, listen=listen)
-    except UsageError as exc:
-        raise UsageError(f"{option}: {exc}") from None
-    if not listen and uri.mode != "udp":
-        raise UsageError(f"{option}: {text!r}: the vehicle must listen (udp:HOST:PORT); "
-                         f"a vehicle that sends first is not supported by the proxy")
-    return uri
 
 
 def _vehicle_address(uri: UdpUri) -> tuple[str, int]:

@@ -10,6 +10,7 @@ from typing import Any
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
+from mavconform.reference_impl.net.uri import FORMS
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 from mavconform.reference_impl.vehicle import VehicleNode
 
@@ -28,6 +29,7 @@ MAV_CMD_MISSION_START (or at once with --autostart). Any GCS that talks to it is
 EPILOG = """\
 examples:
   mavconform vehicle --listen udp:127.0.0.1:14550
+  mavconform vehicle --listen udpin:14550              # the same (udpin:PORT is on 127.0.0.1)
   mavconform vehicle --profile ardupilot               # home at seq 0, non-atomic upload, ...
   mavconform vehicle --profile my-fork.toml            # base = "px4" plus your overrides
   mavconform vehicle --listen udp:127.0.0.1:0 --loss 0.1 --reorder 0.05 --seed 7
@@ -40,7 +42,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=DESCRIPTION, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--listen", default="udp:127.0.0.1:14550", metavar="URI",
-                   help="where to listen: udp:HOST:PORT (port 0: any free port; default %(default)s)")
+                   help=f"where to listen: {FORMS} (either scheme: the vehicle listens; "
+                        "port 0: any free port; default %(default)s)")
     p.add_argument("--connect", metavar="URI",
                    help="also send to a GCS that listens at udp:HOST:PORT (as SITL does)")
     p.add_argument("--profile", default="spec", metavar="NAME|FILE",
@@ -67,8 +70,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    listen = parse_udp_uri(args.listen, listen=True)
-    connect = parse_udp_uri(args.connect) if args.connect else None
+    listen = parse_udp_uri(args.listen, role="listen", option="--listen")
+    connect = parse_udp_uri(args.connect, role="peer", option="--connect") if args.connect else None
     profile = load_profile(args.profile)
     behaviour = profile.behaviour
     if args.capacity is not None:
@@ -95,7 +98,7 @@ def _mutant(name: str, config: Any, profile: str) -> VehicleNode:
     if profile != "spec":
         raise UsageError("--mutant and --profile: a mutant is the spec vehicle with one bug")
     if name not in MUTANTS:
-        raise UsageError(f"unknown mutant {name!r} (see `mavconform clauses --mutants`)")
+        raise UsageError(f"--mutant: unknown mutant {name!r} (see `mavconform clauses --mutants`)")
     return MUTANTS[name].build(config)
 
 

@@ -252,13 +252,19 @@ def test_udp_round_trip_through_the_proxy_with_faults_is_captured_both_ways(tmp_
         for _, channel, message in make_reader(f).iter_messages():
             body = json.loads(message.data)
             topics[(channel.topic, body["kind"], body["msg"])] += 1
-    up = f"{gcs_at[0]}:{gcs_at[1]}->{vehicle_at[0]}:{vehicle_at[1]}"
-    down = f"{vehicle_at[0]}:{vehicle_at[1]}->{gcs_at[0]}:{gcs_at[1]}"
-    assert {topic for topic, _, _ in topics} == {up, down}
-    assert topics[(up, "rx", "MISSION_ITEM_INT")] >= len(PLAN.mission)
-    assert topics[(down, "rx", "MISSION_ITEM_INT")] >= len(PLAN.mission)
-    assert topics[(down, "rx", "MISSION_REQUEST_INT")] > 0
-    assert topics[(down, "drop", "MISSION_REQUEST_INT")] >= 1
+    up = f"{gcs_at[0]}:{gcs_at[1]} -> {vehicle_at[0]}:{vehicle_at[1]}"
+    down = f"{vehicle_at[0]}:{vehicle_at[1]} -> {gcs_at[0]}:{gcs_at[1]}"
+    assert {up, down, f"{down} (lost)"} <= {topic for topic, _, _ in topics} <= {
+        up, down, f"{up} (lost)", f"{down} (lost)"}
+    # each datagram once, as sent (its relayed copy is not written again); a duplicate the
+    # link made is an rx; a loss is on the direction's lost channel
+    assert sum(n for (topic, kind, _), n in topics.items() if topic == up and kind == "tx") == ups.sent
+    assert sum(n for (topic, kind, _), n in topics.items() if topic == down and kind == "tx") == downs.sent
+    assert sum(n for (topic, kind, _), n in topics.items() if topic == up and kind == "rx") <= ups.duplicated
+    assert topics[(up, "tx", "MISSION_ITEM_INT")] >= len(PLAN.mission)
+    assert topics[(down, "tx", "MISSION_ITEM_INT")] >= len(PLAN.mission)
+    assert topics[(f"{down} (lost)", "drop", "MISSION_REQUEST_INT")] >= 1
+    assert all(topic.endswith(" (lost)") == (kind == "drop") for topic, kind, _ in topics)
     assert sum(n for (_, kind, _), n in topics.items() if kind == "drop") == dropped
 
 
@@ -357,7 +363,9 @@ def test_cli_proxy_carries_the_gcs_cli_to_a_vehicle_and_stops_cleanly(tmp_path):
     assert vehicle.store.count(MissionType.MISSION) == len(PLAN.mission)
     with open(capture, "rb") as f:   # closed properly on Ctrl-C: the summary reads
         topics = {channel.topic for _, channel, _ in make_reader(f).iter_messages()}
-    assert len(topics) == 2 and all(t.count("->") == 1 for t in topics)
+    directions = {t for t in topics if not t.endswith(" (lost)")}   # losses: the proxy's faults
+    assert len(directions) == 2 and all(t.count(" -> ") == 1 for t in directions)
+    assert {t.removesuffix(" (lost)") for t in topics} == directions
 
 
 @pytest.mark.udp
@@ -396,7 +404,7 @@ def test_cli_proxy_stops_cleanly_on_sigterm(tmp_path):
 
 @pytest.mark.parametrize("argv, says", [
     (["--forward", "tcp:127.0.0.1:5"], "--forward: bad endpoint 'tcp:127.0.0.1:5': unknown scheme"),
-    (["--forward", "udpin:127.0.0.1:5"], "--forward: 'udpin:127.0.0.1:5': the vehicle must listen"),
+    (["--forward", "udpin:127.0.0.1:5"], "--forward: bad endpoint 'udpin:127.0.0.1:5': here a peer listens"),
     (["--forward", "udp:127.0.0.1:0"], "--forward: bad endpoint 'udp:127.0.0.1:0': port 0"),
     (["--forward", "udp:127.0.0.1:70000"], "bad port 70000"),
     (["--forward", "udp:1.2.3:5"], "bad host '1.2.3'"),
