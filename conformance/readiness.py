@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mavconform.reference_impl.mission import messages as m
-from mavconform.reference_impl.mission.constants import CommandResult, MissionResult
+from mavconform.reference_impl.mission.constants import Cmd, CommandResult, MissionResult
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.wire.dialect import mavlink as _d
 
@@ -21,7 +21,6 @@ from .harness import plans, procedures
 from .harness.match import msg
 from .harness.tester import Tester
 
-MAV_CMD_SET_MESSAGE_INTERVAL = 511
 INTERVAL_US = 1_000_000            # 1 Hz, the rate the spec names for MISSION_CURRENT
 # (message, its id, the MAV_DATA_STREAM group that carries it on ArduPilot-era autopilots)
 STREAMS = (("MISSION_CURRENT", 42, 2),        # MAV_DATA_STREAM_EXTENDED_STATUS
@@ -49,8 +48,8 @@ def prepare(t: Tester) -> Readiness:
 
 def _ask_for_stream(t: Tester, name: str, msg_id: int, group: int) -> str:
     t.mark()
-    t.send(m.command_long_message(MAV_CMD_SET_MESSAGE_INTERVAL, t.target, msg_id, INTERVAL_US))
-    reply = t.poll_for(msg("COMMAND_ACK", command=MAV_CMD_SET_MESSAGE_INTERVAL), t.timings.default_timeout)
+    t.send(m.command_long_message(Cmd.SET_MESSAGE_INTERVAL, t.target, msg_id, INTERVAL_US))
+    reply = t.poll_for(msg("COMMAND_ACK", command=Cmd.SET_MESSAGE_INTERVAL), t.timings.default_timeout)
     if reply is not None and reply.msg.result == CommandResult.ACCEPTED:
         return f"{name} at 1 Hz: MAV_CMD_SET_MESSAGE_INTERVAL accepted"
     said = "no COMMAND_ACK" if reply is None else procedures.command_result_name(reply.msg.result)

@@ -11,8 +11,9 @@ from mavconform.reference_impl.files import Plan, check_writable, load_plan, pla
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
 from mavconform.reference_impl.mission.adaptations import NAMED
 from mavconform.reference_impl.mission.items import MissionType
+from mavconform.reference_impl.mission.plan_upload import previous_plans, upload_plan
 from mavconform.reference_impl.mission.results import OperationResult
-from mavconform.reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.net.uri import FORMS, local_bind_for
 from mavconform.reference_impl.mission.timing import Timings
 from mavconform.reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
 from mavconform.reference_impl.session import GcsSession, TargetUnresponsive
@@ -21,8 +22,9 @@ from .options import capture_to, mavlink_id, seconds_up_to, seq_number, time_sca
 
 DESCRIPTION = """\
 Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
-  udp:HOST:PORT    the vehicle listens there (our reference vehicle, a SITL with a UDP server)
-  udpin:HOST:PORT  we listen there and the vehicle sends to us first (as PX4/ArduPilot SITL do)
+  udp:HOST:PORT      the vehicle listens there (our reference vehicle, a SITL with a UDP server)
+  udpin:[HOST:]PORT  we listen there (default host 127.0.0.1) and the vehicle sends to us
+                     first (as PX4/ArduPilot SITL do)
 The vehicle is found by its HEARTBEAT, whose autopilot field also picks how the GCS adapts
 to it (ArduPilot: home at seq 0, non-terminating NACKs, ...; PX4: ...; anything else: the
 spec-exact GCS); --adapt fixes the choice. The adaptations that acted are printed at the end.
@@ -41,8 +43,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     up = ops.add_parser("upload", help="upload a .plan (mission, fence, rally) or .waypoints file",
                         description="Upload every plan type the file holds: a .plan file sets mission, "
                                     "geofence and rally points (an empty one clears that type); a WPL "
-                                    ".waypoints file sets the mission only.")
+                                    ".waypoints file sets the mission only. The parts go in that order "
+                                    "and the first one that fails stops the rest; nothing already "
+                                    "uploaded is rolled back.")
     up.add_argument("file", metavar="FILE")
+    up.add_argument("--keep-going", action="store_true",
+                    help="upload every part even after one fails (e.g. the fence and rally points "
+                         "of a plan whose mission the vehicle refused)")
     down = ops.add_parser("download", help="download into a .plan or .waypoints file",
                           description="Download the vehicle's plans: all three types into a .plan "
                                       "file, the mission only into a .waypoints file.")
@@ -57,7 +64,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     setcur.add_argument("seq", type=seq_number, metavar="SEQ", help="mission item number, 0..65535")
     setcur.add_argument("--command", action="store_true", help="use the command instead of the message")
     for p in (up, down, clear, setcur):
-        p.add_argument("--target", required=True, metavar="URI", help="udp:HOST:PORT or udpin:HOST:PORT")
+        p.add_argument("--target", required=True, metavar="URI", help=FORMS)
         p.add_argument("--system", type=mavlink_id, default=255, help="our system id (default 255)")
         p.add_argument("--heartbeat-timeout", type=seconds_up_to(3600), default=5.0, metavar="S",
                        help="how long to wait for the target's HEARTBEAT (default 5)")
@@ -74,7 +81,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    target = parse_udp_uri(args.target)
+    target = parse_udp_uri(args.target, option="--target")
     # bad files and paths fail before any network I/O
     plan = load_plan(args.file) if args.operation == "upload" else None
     if args.operation == "download":
@@ -83,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             session.wait_for_target(args.heartbeat_timeout)
         except TargetUnresponsive as exc:
-            print(f"error: {target}: {exc}", file=sys.stderr)
+            print(f"mavconform: target unresponsive: {target}: {exc}", file=sys.stderr)
             return 1
         gcs = session.gcs
         print(f"target {gcs.target[0]}/{gcs.target[1]} at {target}")
@@ -98,7 +105,14 @@ def run(args: argparse.Namespace) -> int:
 
 def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -> list[OperationResult]:
     if args.operation == "upload":
-        return [session.upload(t, plan.items(t)) for t in plan_types_in(args.file)]
+        previous = previous_plans(session.gcs.received)   # before anything is replaced
+        done = upload_plan([(t, plan.items(t)) for t in plan_types_in(args.file)], session.upload,
+                           keep_going=args.keep_going, previous=previous)
+        for line in done.report():
+            print(line)
+        if done.not_sent:
+            print("(--keep-going uploads every part even after one fails)")
+        return list(done.results)
     if args.operation == "download":
         results = [session.download(t) for t in plan_types_in(args.file)]
         if all(r.ok for r in results):

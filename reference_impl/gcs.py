@@ -23,15 +23,14 @@ from .mission.items import MissionItem, MissionType
 from .mission.results import OperationResult
 from .mission.timing import Timings
 from .net.node import Address
+from .wire.dialect import mavlink as _d
 from .wire.signing import SigningKey
-
-MAV_COMP_ID_MISSIONPLANNER = 190
 
 
 @dataclass(frozen=True)
 class GcsConfig:
     system: int = 255
-    component: int = MAV_COMP_ID_MISSIONPLANNER
+    component: int = _d.MAV_COMP_ID_MISSIONPLANNER
     target: Peer | None = None          # None: the first autopilot whose HEARTBEAT we hear
     timings: Timings = Timings()
     upload_int: bool = True

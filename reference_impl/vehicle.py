@@ -23,10 +23,9 @@ from .net.node import Address
 from .wire.dialect import mavlink as _d
 from .wire.signing import SigningKey
 
-MAV_TYPE_QUADROTOR = 2
-MAV_AUTOPILOT_GENERIC_MISSION_FULL = 4
-MAV_STATE_STANDBY, MAV_STATE_ACTIVE = 3, 4
-MODE_FLAG_AUTO = 4 | 1  # MAV_MODE_FLAG_AUTO_ENABLED | CUSTOM_MODE_ENABLED
+# HEARTBEAT.base_mode: custom_mode always carries the mode; AUTO is added while flying
+MODE_FLAGS_IDLE = _d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+MODE_FLAGS_FLYING = _d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | _d.MAV_MODE_FLAG_AUTO_ENABLED
 HEARTBEAT_PERIOD = 1.0
 POSITION_PERIOD = 1.0
 
@@ -42,8 +41,12 @@ class VehicleConfig:
     mavlink_version: int = 2
     signing: SigningKey | None = None
     require_signature: bool = False
-    # HEARTBEAT.autopilot (MAV_AUTOPILOT): GCSs adapt to it (generic 4, ArduPilot 3, PX4 12)
-    autopilot: int = MAV_AUTOPILOT_GENERIC_MISSION_FULL
+    # HEARTBEAT.autopilot (MAV_AUTOPILOT): GCSs adapt to it (generic 7, ArduPilot 3, PX4 12)
+    autopilot: int = _d.MAV_AUTOPILOT_GENERIC_MISSION_FULL
+    # HEARTBEAT.custom_mode on the ground / while flying the mission, in the autopilot's own
+    # numbering (GCSs show it as the flight mode); 0 for the generic autopilot, which has none
+    custom_mode_idle: int = 0
+    custom_mode_mission: int = 0
     # the GCS link is bound to one peer address (real SITL links: VARIANTS.md L1, L2)
     single_peer_link: bool = False
 
@@ -162,10 +165,11 @@ class VehicleNode:
             self.endpoint.send(m.command_ack_message(msg.command, CommandResult.UNSUPPORTED, source), source)
 
     def _heartbeat(self) -> Any:
-        flying = self.flight.flying
+        cfg, flying = self.config, self.flight.flying
         return _d.MAVLink_heartbeat_message(
-            MAV_TYPE_QUADROTOR, self.config.autopilot, MODE_FLAG_AUTO if flying else 1, 0,
-            MAV_STATE_ACTIVE if flying else MAV_STATE_STANDBY, 3)
+            _d.MAV_TYPE_QUADROTOR, cfg.autopilot, MODE_FLAGS_FLYING if flying else MODE_FLAGS_IDLE,
+            cfg.custom_mode_mission if flying else cfg.custom_mode_idle,
+            _d.MAV_STATE_ACTIVE if flying else _d.MAV_STATE_STANDBY, 3)
 
     def _position(self, now: float) -> Any:
         p = self.flight.where(now)

@@ -107,4 +107,13 @@ def test_unknown_command_is_unsupported_and_heartbeat_is_1hz():
     acks = [m for m in gcs.received if m.get_type() == "COMMAND_ACK"]
     assert [(a.command, a.result) for a in acks] == [(31000, CommandResult.UNSUPPORTED)]
     beats = [m for m in gcs.received if m.get_type() == "HEARTBEAT"]
-    assert len(beats) == 10 and beats[0].autopilot == 4   # MAV_AUTOPILOT_GENERIC_MISSION_FULL
+    assert len(beats) == 10
+
+
+def test_heartbeat_says_generic_autopilot_with_full_mission_support():
+    """MAV_AUTOPILOT_GENERIC_MISSION_FULL is 7; the vehicle once sent 4 (MAV_AUTOPILOT_OPENPILOT)."""
+    net, vehicle, gcs, s = rig()
+    beat = gcs.target_heartbeat
+    assert beat.autopilot == d.MAV_AUTOPILOT_GENERIC_MISSION_FULL == 7
+    assert (beat.type, beat.system_status) == (d.MAV_TYPE_QUADROTOR, d.MAV_STATE_STANDBY)
+    assert beat.base_mode == d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and beat.custom_mode == 0

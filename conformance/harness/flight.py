@@ -26,6 +26,7 @@ from dataclasses import replace
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import Cmd, CommandResult
 from mavconform.reference_impl.mission.items import MissionItem
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 from ..outcome import NotApplicable, PreconditionFailed
 from . import plans, procedures
@@ -40,13 +41,7 @@ ARM_RETRY = 2.0          # s between arming attempts
 CLIMB_WAIT = 30.0        # s for the take-off to reach most of its altitude
 METRES_PER_DEGREE = 111_320.0
 
-ARDUPILOT = 3
-COPTER_GUIDED = 4        # ArduCopter custom mode
-MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
-MAV_CMD_DO_SET_MODE = 176
-MAV_CMD_COMPONENT_ARM_DISARM = 400
-MAV_CMD_NAV_TAKEOFF = 22
-MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
+COPTER_GUIDED = 4        # ArduCopter custom mode (ArduCopter mode.h Mode::Number::GUIDED)
 GOING = (CommandResult.ACCEPTED, CommandResult.IN_PROGRESS)
 UNSUPPORTED = CommandResult.UNSUPPORTED
 POSITION = msg("GLOBAL_POSITION_INT", where=lambda f: bool(f.msg.lat or f.msg.lon), label="GLOBAL_POSITION_INT with a position")
@@ -80,10 +75,10 @@ def start(t: Tester, autopilot: int | None) -> None:
     if procedures.set_current(t, first)[0] is None:
         raise PreconditionFailed(f"flight: after MISSION_SET_CURRENT {first} no MISSION_CURRENT reported "
                                  f"item {first} current, so the flight would not start at the first item")
-    if autopilot == ARDUPILOT:
-        _command(t, MAV_CMD_DO_SET_MODE, "set mode GUIDED", MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, COPTER_GUIDED)
+    if autopilot == _d.MAV_AUTOPILOT_ARDUPILOTMEGA:
+        _command(t, Cmd.DO_SET_MODE, "set mode GUIDED", _d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, COPTER_GUIDED)
         if _arm(t):
-            _command(t, MAV_CMD_NAV_TAKEOFF, f"take off to {ALTITUDE_M:g} m", *([0.0] * 6), ALTITUDE_M)
+            _command(t, Cmd.NAV_TAKEOFF, f"take off to {ALTITUDE_M:g} m", *([0.0] * 6), ALTITUDE_M)
             _climb(t)
     _command(t, int(Cmd.MISSION_START), "start the mission", 0.0, 0.0)
 
@@ -91,7 +86,7 @@ def start(t: Tester, autopilot: int | None) -> None:
 def end(t: Tester) -> None:
     """Send the vehicle home, so the plans later clauses upload are not flown."""
     t.note("the flight is over: MAV_CMD_NAV_RETURN_TO_LAUNCH")
-    t.send(m.command_long_message(MAV_CMD_NAV_RETURN_TO_LAUNCH, t.target))
+    t.send(m.command_long_message(Cmd.NAV_RETURN_TO_LAUNCH, t.target))
 
 
 def _command(t: Tester, command: int, what: str, *params: float) -> int | None:
@@ -115,8 +110,8 @@ def _arm(t: Tester) -> bool:
     opened = t.now()
     for _ in range(int(ARM_WINDOW / ARM_RETRY) + 1):
         t.mark()
-        t.send(m.command_long_message(MAV_CMD_COMPONENT_ARM_DISARM, t.target, 1.0))
-        reply = t.poll_for(msg("COMMAND_ACK", command=MAV_CMD_COMPONENT_ARM_DISARM), t.timings.default_timeout)
+        t.send(m.command_long_message(Cmd.COMPONENT_ARM_DISARM, t.target, 1.0))
+        reply = t.poll_for(msg("COMMAND_ACK", command=Cmd.COMPONENT_ARM_DISARM), t.timings.default_timeout)
         if reply is not None and reply.msg.result in GOING:
             return True
         if reply is not None and reply.msg.result == UNSUPPORTED:

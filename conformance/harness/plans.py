@@ -9,8 +9,10 @@ from __future__ import annotations
 
 from mavconform.reference_impl.mission.constants import Cmd
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
-FRAME_GLOBAL_RELATIVE_ALT = 3      # MAV_FRAME_GLOBAL_RELATIVE_ALT: x/y degE7 in the INT form
+FRAME_GLOBAL_RELATIVE_ALT = _d.MAV_FRAME_GLOBAL_RELATIVE_ALT   # x/y degE7 in the INT form
+
 STEP = 40                          # degE7 between waypoints: about half a metre
 DEFAULT_HOME = (473977420, 85455940)
 

@@ -9,11 +9,11 @@ whatever the MAVLink version. A target that never acknowledges it gets the reply
 from __future__ import annotations
 
 from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.constants import Cmd
 
 from .match import msg
 from .tester import Tester
 
-MAV_CMD_REQUEST_MESSAGE = 512
 MISSION_REPLIES = ("MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ACK",
                    "MISSION_ITEM", "MISSION_ITEM_INT")
 
@@ -26,8 +26,8 @@ def answers_before_sentinel(t: Tester) -> list:
     version. A target that never acknowledges it has had the reply timeout to answer."""
     t.note("then a properly addressed COMMAND_LONG MAV_CMD_REQUEST_MESSAGE (HEARTBEAT): its "
            "COMMAND_ACK closes the window")
-    t.send(m.command_long_message(MAV_CMD_REQUEST_MESSAGE, t.target))
-    sentinel = msg("COMMAND_ACK", command=MAV_CMD_REQUEST_MESSAGE)
+    t.send(m.command_long_message(Cmd.REQUEST_MESSAGE, t.target))
+    sentinel = msg("COMMAND_ACK", command=Cmd.REQUEST_MESSAGE)
     seen = t.collect(msg(MISSION_REPLIES), t.timings.default_timeout, stop=sentinel)
     return [f for _, f in seen if not sentinel(f)]
 

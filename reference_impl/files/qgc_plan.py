@@ -22,14 +22,15 @@ from mavconform.reference_impl.files.plan import (
 )
 from mavconform.reference_impl.mission.constants import Cmd
 from mavconform.reference_impl.mission.items import GLOBAL_FRAMES, MissionItem, MissionType
+from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 FILE_VERSION = 1
 MISSION_VERSION = 2
 GEOFENCE_VERSION = 2
 RALLY_VERSION = 2
 SHAPE_VERSION = 1  # of each polygon and circle
-FRAME_GLOBAL = 0  # polygon vertices and circle centres (as QGC uploads them)
-FRAME_GLOBAL_RELATIVE_ALT = 3  # rally and breach-return points (as QGC uploads them)
+FRAME_GLOBAL = _d.MAV_FRAME_GLOBAL  # polygon vertices and circle centres (as QGC uploads them)
+FRAME_GLOBAL_RELATIVE_ALT = _d.MAV_FRAME_GLOBAL_RELATIVE_ALT  # rally and breach-return points (as QGC uploads them)
 PARAM_COUNT = 7
 VERTEX_COMMAND = {True: Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION,
                   False: Cmd.NAV_FENCE_POLYGON_VERTEX_EXCLUSION}

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..wire.dialect import mavlink as _d
 from .items import GLOBAL_FRAMES, MissionItem, MissionType
 
 
@@ -70,9 +71,10 @@ RESTART_DOWNLOAD_ON_ERROR = Adaptation(
     "VARIANTS P6; our own (QGC and MAVSDK report the failure and leave the retry to the user)")
 RETRY_REFUSED_SET_CURRENT = Adaptation(
     "retry-refused-set-current",
-    "a refused set-current (STATUSTEXT or COMMAND_ACK) is retried on the normal timer, at most "
-    "max_retries times, after a MISSION_ACK OPERATION_CANCELLED per plan type ends any transfer "
-    "the vehicle still holds for us (a late duplicate request can open one)",
+    "a set-current refused because the vehicle is busy (a STATUSTEXT saying busy / in progress, "
+    "COMMAND_ACK TEMPORARILY_REJECTED) is retried on the normal timer, at most max_retries times, "
+    "after a MISSION_ACK OPERATION_CANCELLED per plan type ends any transfer the vehicle still "
+    "holds for us (a late duplicate request can open one); any other refusal ends it at once",
     "VARIANTS P12 (set-current only while no transfer runs), P2' (a cancel resets it); our own")
 AWAIT_ACCEPT_AFTER_NACK = Adaptation(
     "await-accept-after-nack",
@@ -133,10 +135,6 @@ class Adaptations:
 
 NONE = Adaptations()
 
-# MAV_AUTOPILOT values in HEARTBEAT.autopilot
-MAV_AUTOPILOT_ARDUPILOTMEGA = 3
-MAV_AUTOPILOT_PX4 = 12
-
 ARDUPILOT = Adaptations(
     name="ardupilot", home_at_seq0=True, item_int_for_request=True, ignore_nonterminating_nack=True,
     clear_types_separately=True, non_atomic_upload=True, finish_restarted_upload=True,
@@ -155,9 +153,9 @@ def for_autopilot(autopilot: int) -> Adaptations:
 
     The one place that maps an autopilot to behaviour. Anything else gets the spec-exact
     GCS: a vehicle that follows the spec needs no adaptation."""
-    if autopilot == MAV_AUTOPILOT_ARDUPILOTMEGA:
+    if autopilot == _d.MAV_AUTOPILOT_ARDUPILOTMEGA:
         return ARDUPILOT
-    if autopilot == MAV_AUTOPILOT_PX4:
+    if autopilot == _d.MAV_AUTOPILOT_PX4:
         return PX4
     return NONE
 

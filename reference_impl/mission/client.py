@@ -57,6 +57,13 @@ ITEM_DEFECT_CODES = frozenset({
 # NACKs that refuse an operation's opening message itself (nothing was changed by it).
 _REFUSALS = frozenset({MissionResult.NO_SPACE, MissionResult.DENIED, MissionResult.UNSUPPORTED})
 
+# A set-current refusal the vehicle lifts by itself once it is idle again (P12): PX4's
+# "WPM: IGN WP CURR CMD: Busy", our P12 vehicle's "... a transfer is in progress", and the
+# command's TEMPORARILY_REJECTED. Any other refusal ("Not in list", DENIED, UNSUPPORTED, ...)
+# is the vehicle's last word: asking again cannot change it, only a missing answer can.
+TRANSIENT_SET_CURRENT_TEXTS = ("busy", "in progress")
+TRANSIENT_COMMAND_RESULTS = frozenset({CommandResult.TEMPORARILY_REJECTED})
+
 _S, _E = ClientState, ClientEvent
 
 
@@ -363,6 +370,10 @@ class MissionClient:
 
     def _on_ack(self, op: _Op, msg: Any, now: float) -> list[Action]:
         if op.operation is Operation.SET_CURRENT:
+            if msg.type == MissionResult.UNSUPPORTED and msg.mission_type == MissionType.MISSION:
+                # a vehicle without missions: no item of it can ever be made current
+                return self._set_current_refused(op, "vehicle answered MISSION_ACK UNSUPPORTED", now,
+                                                 transient=False)
             return []
         if op.operation is Operation.CLEAR:
             if msg.mission_type not in (op.clearing, MissionType.ALL):
@@ -421,14 +432,19 @@ class MissionClient:
         if name == "STATUSTEXT" and msg.severity <= Severity.WARNING and not op.via_command:
             # the message form's only failure notice (seed 000); the command has COMMAND_ACK
             text = msg.text.decode(errors="replace") if isinstance(msg.text, bytes) else msg.text
-            return self._set_current_refused(op, f"vehicle said: {text.rstrip(chr(0))}", now)
+            text = text.rstrip(chr(0))
+            transient = any(word in text.lower() for word in TRANSIENT_SET_CURRENT_TEXTS)
+            return self._set_current_refused(op, f"vehicle said: {text}", now, transient=transient)
         if (name == "COMMAND_ACK" and msg.command == Cmd.DO_SET_MISSION_CURRENT
-                and msg.result != CommandResult.ACCEPTED):
-            return self._set_current_refused(op, f"COMMAND_ACK result {msg.result}", now)
+                and msg.result not in (CommandResult.ACCEPTED, CommandResult.IN_PROGRESS)):
+            return self._set_current_refused(op, f"COMMAND_ACK {_command_result(msg.result)}", now,
+                                             transient=msg.result in TRANSIENT_COMMAND_RESULTS)
         return []
 
-    def _set_current_refused(self, op: _Op, why: str, now: float) -> list[Action]:
-        if not self.adaptations.retry_refused_set_current:
+    def _set_current_refused(self, op: _Op, why: str, now: float, *, transient: bool) -> list[Action]:
+        """A definitive refusal ends the operation at once, named; only a busy vehicle is
+        asked again (with RETRY_REFUSED_SET_CURRENT), as is one that does not answer."""
+        if not transient or not self.adaptations.retry_refused_set_current:
             return self._finish(now, Outcome.REJECTED, detail=why)
         # P12/P2': a transfer the vehicle still holds for us blocks it; end that transfer,
         # and let the timer resend the set-current (it gives up after max_retries).
@@ -602,6 +618,14 @@ def _stale_for_clear(msg: Any) -> bool:
     if msg.type == MissionResult.ACCEPTED:
         return bool(getattr(msg, "opaque_id", 0))
     return msg.type in _NOT_A_CLEAR_ANSWER
+
+
+def _command_result(code: int) -> str:
+    """MAV_RESULT as its name (e.g. DENIED), or the number if the dialect has none."""
+    try:
+        return CommandResult(code).name
+    except ValueError:
+        return f"result {code}"
 
 
 def _result(code: int) -> MissionResult | int:

@@ -16,6 +16,8 @@ from dataclasses import dataclass, replace
 from enum import IntEnum
 from typing import Iterable
 
+from ..wire.dialect import mavlink as _d
+
 
 class MissionType(IntEnum):
     """MAV_MISSION_TYPE: the three plan kinds the protocol stores independently."""
@@ -42,7 +44,7 @@ PLAIN_FRAME = {5: 0, 6: 3, 11: 10}
 # MAV_FRAME values whose x/y are local metres (metres*1e4 in MISSION_ITEM_INT).
 LOCAL_FRAMES = frozenset({1, 7, 8, 9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21})
 # MAV_FRAME_MISSION: x/y are plain parameters, carried unscaled.
-FRAME_MISSION = 2
+FRAME_MISSION = _d.MAV_FRAME_MISSION
 
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 

@@ -89,19 +89,17 @@ def set_current_message(seq: int, target: tuple[int, int]) -> Any:
 
 
 # --- presence: who is a GCS and who a vehicle ------------------------------------------------
-MAV_TYPE_GCS = 6
-MAV_AUTOPILOT_INVALID = 8
 HEARTBEAT_PERIOD = 1.0      # s between a ground station's HEARTBEATs
 
 
 def gcs_heartbeat_message() -> Any:
     """The HEARTBEAT a ground station sends: MAV_TYPE_GCS, no autopilot, MAV_STATE_ACTIVE."""
-    return _d.MAVLink_heartbeat_message(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3)
+    return _d.MAVLink_heartbeat_message(_d.MAV_TYPE_GCS, _d.MAV_AUTOPILOT_INVALID, 0, 0, _d.MAV_STATE_ACTIVE, 3)
 
 
 def is_vehicle_heartbeat(msg: Any) -> bool:
     """A HEARTBEAT that names an autopilot and is not a GCS's: the target to discover."""
-    return msg._type == "HEARTBEAT" and msg.type != MAV_TYPE_GCS and msg.autopilot != MAV_AUTOPILOT_INVALID
+    return msg._type == "HEARTBEAT" and msg.type != _d.MAV_TYPE_GCS and msg.autopilot != _d.MAV_AUTOPILOT_INVALID
 
 
 def command_long_message(command: int, target: tuple[int, int], *params: float) -> Any:

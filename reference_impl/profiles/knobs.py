@@ -168,6 +168,10 @@ _KNOBS = (
     Knob("legacy_warnings", BEHAVIOUR, "legacy_warnings", _bool, "STATUSTEXT warning for MISSION_REQUEST / MISSION_ITEM"),
     # vehicle
     Knob("autopilot", CONFIG, "autopilot", _count(0, 255), "HEARTBEAT.autopilot (MAV_AUTOPILOT)"),
+    Knob("custom_mode_idle", CONFIG, "custom_mode_idle", _count(0, 0xFFFFFFFF),
+         "HEARTBEAT.custom_mode when not flying the mission (the autopilot's own mode number)"),
+    Knob("custom_mode_mission", CONFIG, "custom_mode_mission", _count(0, 0xFFFFFFFF),
+         "HEARTBEAT.custom_mode while flying the mission (the autopilot's own mode number)"),
     Knob("single_peer_link", CONFIG, "single_peer_link", _bool,
          "the GCS link is bound to the first peer address: other senders are never read"),
 )

@@ -664,13 +664,13 @@ def test_refused_set_current_is_retried_after_cancelling_stale_transfers():
     assert names([s.sent_at[-1][1]]) == ["MISSION_SET_CURRENT"]
     s.feed(m.current_message(1, 2, 2, 2, (0, 0, 0)), VEHICLE)
     assert result(s).ok and result(s).adaptations == ("retry-refused-set-current",)
-    s2 = client(adaptations=PX4)      # refused every time: REJECTED after the retries
+    s2 = client(adaptations=PX4)      # busy every time: REJECTED after the retries
     s2.call(s2.engine.set_current(1, s2.now))
     for _ in range(7):
-        s2.feed(d.MAVLink_statustext_message(4, b"Set current refused", 0, 0), VEHICLE)
+        s2.feed(d.MAVLink_statustext_message(4, b"WPM: IGN WP CURR CMD: Busy", 0, 0), VEHICLE)
         s2.advance(1.5)
     r = result(s2)
-    assert r.outcome is Outcome.REJECTED and "Set current refused" in r.detail
+    assert r.outcome is Outcome.REJECTED and "Busy" in r.detail and r.retries == 5
     spec = client()
     spec.call(spec.engine.set_current(1, spec.now))
     spec.feed(d.MAVLink_statustext_message(4, b"Set current failed", 0, 0), VEHICLE)

@@ -76,6 +76,6 @@ def test_spec_profile_is_the_default_vehicle() -> None:
 
 
 def test_the_builtin_vehicle_says_who_it_is() -> None:
-    for name, autopilot in (("spec", 4), ("px4", 12), ("ardupilot", 3)):
+    for name, autopilot in (("spec", 7), ("px4", 12), ("ardupilot", 3)):
         with Session(parse_target(f"builtin:{name}"), virtual=True) as session:
             assert session.discover()["autopilot"] == autopilot
