@@ -12,6 +12,13 @@ case is saved at once, unminimised, with the capture of the live traffic that le
 (the last RING_SECONDS, kept while the campaign ran). With a restart hook (`Restarter`,
 `--restart-cmd`) the target is restarted, the case replayed to confirm it, and minimised
 with a restart before every attempt; without one the case says it was neither.
+
+An interrupt (Ctrl-C, or SIGTERM made one) ends a campaign as the budget does, at once:
+the search hands over the findings it had seen (`SearchInterrupted`), shrunk as far as it
+got; they are saved without minimising (in-process: replayed once, in virtual time, for the
+capture; over UDP: with the live capture, not replayed), and `run_campaign` raises
+`CampaignInterrupted` with the result, so its caller can still report. An interrupt while a
+finding is minimised or replayed saves it as it was (`save_unreplayed`), never loses it.
 """
 
 from __future__ import annotations
@@ -36,7 +43,8 @@ from mavconform.reference_impl.net.sim import CaptureRecord
 from mavconform.reference_impl.wire.codec import FrameDecoder
 
 from .case import Case, Violation, save_case
-from .outcomes import DEATH_KINDS, TargetUnresponsive, ToolError, ToolFailure
+from .outcomes import (DEATH_KINDS, SearchInterrupted, TargetUnresponsive, ToolError, ToolFailure,
+                       InterruptWatch, caused_by_interrupt, interrupts_noted, interrupts_watched)
 
 MODES = ("protocol", "frames")
 SHRINK_LIMIT = 60.0          # s Hypothesis may spend shrinking one campaign's findings, at most
@@ -110,12 +118,46 @@ class CampaignResult:
     duration_s: float
     findings: list[Finding]
     invariants: dict[str, str]       # name -> what it asserts, for the report's rows
+    interrupted_at: str | None = None   # an interrupt ended it: "search", "shrinking", "saving findings"
+    interrupted_by: str | None = None   # "SIGINT" (Ctrl-C), "SIGTERM"; None if not known
+
+    @property
+    def interrupted(self) -> bool:
+        return self.interrupted_at is not None
+
+
+class CampaignInterrupted(KeyboardInterrupt):
+    """Raised by `run_campaign` after an interrupt, once what was found is saved: `result`
+    is the campaign so far. A KeyboardInterrupt, so a caller that cannot report still stops."""
+
+    def __init__(self, result: CampaignResult) -> None:
+        super().__init__()
+        self.result = result
+
+
+class SaveInterrupted(KeyboardInterrupt):
+    """An interrupt while a finding was minimised or replayed: `finding` is it, saved as it
+    was then (not replayed)."""
+
+    def __init__(self, finding: Finding) -> None:
+        super().__init__()
+        self.finding = finding
+
+
+INTERRUPTED_NOTE = "saved unminimised and not replayed: the campaign was interrupted"
 
 
 def run_campaign(options: CampaignOptions,
                  on_progress: Callable[[Progress], None] | None = None) -> CampaignResult:
     """Search, then save what was found. Raises `TargetUnresponsive` (no HEARTBEAT at the
-    start) and `ToolError` (an exception of ours, with the case that caused it)."""
+    start), `ToolError` (an exception of ours, with the case that caused it) and, after an
+    interrupt, `CampaignInterrupted` (what was found is saved; the result says so)."""
+    with interrupts_watched() as watch:
+        return _run_campaign(options, on_progress, watch)
+
+
+def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], None] | None,
+                  watch: InterruptWatch) -> CampaignResult:
     from mavconform.conformance.target_uri import parse_target
 
     uri = parse_target(options.target)   # a bad URI is the user's mistake: say so before searching
@@ -132,6 +174,7 @@ def run_campaign(options: CampaignOptions,
     ring = None if uri.in_process else RingCapture()
 
     def example_done(units: int) -> None:
+        watch.check()                # an interrupt Python dropped (see interrupts_watched)
         progress.examples += 1
         progress.units += units
         if deadline is not None:     # shrinking what an example found gets what is left
@@ -143,21 +186,30 @@ def run_campaign(options: CampaignOptions,
     extra: dict[str, Any] = {"capture": ring}
     if options.profile is not None:
         extra["profile"] = options.profile
+    interrupted_at: str | None = None
     try:
         with shrink_time_limit(shrink):
             cases = mode.search(options.target, seed=options.seed, max_examples=options.examples,
                                 stop_after=options.time_s, database=options.database,
                                 on_example=example_done, **extra)
+        if watch.noted:                  # dropped after the last example: still an interrupt
+            interrupted_at = "search"
+    except SearchInterrupted as exc:
+        cases, interrupted_at = exc.cases, exc.phase
+    except KeyboardInterrupt:            # e.g. while a UDP target was being discovered
+        cases, interrupted_at = [], "search"
     except ToolError as exc:
         exc.saved = save_tool_failure(exc.failure, options, options.findings_dir)
         raise
     except (UsageError, TargetUnresponsive):
         raise
     except Exception as exc:   # noqa: BLE001 - outside an example (Hypothesis, the search loop): ours too
-        failure = ToolFailure.from_exception(exc, [], options.seed)
-        error = ToolError(failure)
-        error.saved = save_tool_failure(failure, options, options.findings_dir)
-        raise error from exc
+        if not caused_by_interrupt(exc):  # else what a mode let through as an interrupt unwound it
+            failure = ToolFailure.from_exception(exc, [], options.seed)
+            error = ToolError(failure)
+            error.saved = save_tool_failure(failure, options, options.findings_dir)
+            raise error from exc
+        cases, interrupted_at = [], "search"
     duration = progress.elapsed
     until = time.monotonic() + SHRINK_LIMIT if deadline is None else max(deadline, time.monotonic() + SAVE_GRACE)
     restarter = Restarter(options.restart_cmd, options.restart_timeout) if options.restart_cmd else None
@@ -165,16 +217,31 @@ def run_campaign(options: CampaignOptions,
     for case in cases:
         case = Case(case.mode, case.target, case.seed, case.steps, case.violation,
                     {**case.found_by, "campaign_seed": options.seed,
-                     **({"profile": options.profile} if options.profile else {})})
-        if ring is not None and case.violation is not None and case.violation.invariant in DEATH_KINDS:
-            findings.append(save_death(mode, case, options.findings_dir, ring, restarter, until=until))
-        else:
-            findings.append(save_finding(mode, case, options.findings_dir, minimise_until=until))
+                     **({"profile": options.profile} if options.profile else {}),
+                     **({"interrupted": interrupted_at} if interrupted_at else {})})
+        try:
+            if interrupted_at is not None and ring is not None:   # no replays over UDP: stop now
+                finding = save_unreplayed(case, options.findings_dir, ring, note=INTERRUPTED_NOTE)
+            elif ring is not None and case.violation is not None and case.violation.invariant in DEATH_KINDS:
+                finding = save_death(mode, case, options.findings_dir, ring, restarter, until=until)
+            else:                        # interrupted: no minimising, one replay in virtual time
+                finding = save_finding(mode, case, options.findings_dir,
+                                       minimise_until=until if interrupted_at is None else time.monotonic())
+        except SaveInterrupted as exc:
+            finding, interrupted_at = exc.finding, interrupted_at or "saving findings"
+        findings.append(finding)
         progress.findings += 1
-        if on_progress is not None:
-            on_progress(progress)
-    return CampaignResult(options, started, progress.examples, progress.units, duration,
-                          findings, dict(getattr(mode, "INVARIANTS", {})))
+        try:
+            if on_progress is not None:
+                on_progress(progress)
+        except KeyboardInterrupt:
+            interrupted_at = interrupted_at or "saving findings"
+    result = CampaignResult(options, started, progress.examples, progress.units, duration,
+                            findings, dict(getattr(mode, "INVARIANTS", {})), interrupted_at,
+                            watch.noted[0] if watch.noted and interrupted_at else None)
+    if interrupted_at is not None:
+        raise CampaignInterrupted(result)
+    return result
 
 
 MINIMISE_REPLAYS = 400       # bound on the replays the step-removal pass may spend per finding
@@ -251,12 +318,30 @@ def save_finding(mode: ModuleType, case: Case, directory: str | Path, *,
                  minimise_until: float | None = None) -> Finding:
     """Save the case, then replay it once with a capture: the MCAP beside the JSON, and the
     exchange for the report. A case that does not replay to the same invariant is kept and
-    flagged, since a finding that cannot be reproduced still happened."""
-    case = minimise(mode, case, until=minimise_until)
-    path = save_case(case, directory)
-    mcap = path.with_suffix(".mcap")
-    replayed, exchange = replay_recorded(mode, case, mcap)
+    flagged, since a finding that cannot be reproduced still happened. An interrupt raises
+    `SaveInterrupted` with the case saved as it was then (minimised if that had finished)."""
+    mcap = None
+    try:
+        case = minimise(mode, case, until=minimise_until)
+        path = save_case(case, directory)
+        mcap = path.with_suffix(".mcap")
+        replayed, exchange = replay_recorded(mode, case, mcap)
+    except KeyboardInterrupt:
+        if mcap is not None:     # the replay's capture was cut short: no half a capture
+            mcap.unlink(missing_ok=True)
+        raise SaveInterrupted(save_unreplayed(case, directory, note=INTERRUPTED_NOTE)) from None
     return Finding(case, path, mcap, replayed, exchange)
+
+
+def save_unreplayed(case: Case, directory: str | Path, ring: RingCapture | None = None, *,
+                    note: str) -> Finding:
+    """Save the case as it is, with the live capture if there is one, no replay: quick, and
+    a further interrupt waits for it, so the files are whole."""
+    with interrupts_noted():
+        path = save_case(case, directory)
+        mcap = path.with_suffix(".mcap") if ring is not None else None
+        exchange = ring.write(mcap) if ring is not None and mcap is not None else []
+    return Finding(case, path, mcap, None, exchange, note=note)
 
 
 class RingCapture:
@@ -323,7 +408,16 @@ def save_death(mode: ModuleType, case: Case, directory: str | Path, ring: RingCa
                restarter: Restarter | None, *, until: float) -> Finding:
     """A UDP target that stopped answering: save the case and the live capture first (the
     finding must never be lost), then, given a restart hook and time, confirm it by replay
-    and minimise it with a restart before every attempt."""
+    and minimise it with a restart before every attempt. An interrupt raises
+    `SaveInterrupted` with the case as first saved."""
+    try:
+        return _save_death(mode, case, directory, ring, restarter, until=until)
+    except KeyboardInterrupt:
+        raise SaveInterrupted(save_unreplayed(case, directory, ring, note=INTERRUPTED_NOTE)) from None
+
+
+def _save_death(mode: ModuleType, case: Case, directory: str | Path, ring: RingCapture,
+                restarter: Restarter | None, *, until: float) -> Finding:
     path = save_case(case, directory)
     exchange = ring.write(path.with_suffix(".mcap"))
     if restarter is None:

@@ -4,6 +4,10 @@ Each invariant the mode checks is one row, like a clause: `FUZZ.PROTOCOL.atomic-
 passes if no example broke it and fails with the finding's detail, the replay command and
 the replayed exchange (drawn as a sequence diagram in the HTML report) if one did. The
 document also carries a `fuzz` block: the campaign's counters and every saved case.
+
+An interrupted campaign is marked so (`run.interrupted`, `run.interrupted_at`, where known
+`run.interrupted_by`, and `fuzz.interrupted`). Its verdict is "fail" if it found something (a finding stands, however
+the search ended), else "interrupted": a search that did not finish is not known to pass.
 """
 
 from __future__ import annotations
@@ -12,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from mavconform import __version__
-from mavconform.reports.run_document import FORMAT, outcome_counts
+from mavconform.reports.run_document import FORMAT, INTERRUPTED, outcome_counts
 
 from .campaign import CampaignResult, Finding
 
@@ -28,7 +32,9 @@ def campaign_document(result: CampaignResult) -> dict[str, Any]:
         name = finding.case.violation.invariant if finding.case.violation else "unknown"
         by_invariant.setdefault(name, []).append(finding)
     names = list(result.invariants) + sorted(set(by_invariant) - set(result.invariants))
-    rows = [_row(opts.mode, name, result.invariants.get(name, name), by_invariant.get(name, []))
+    so_far = f"no example broke it in the {result.examples} examples run before the campaign was interrupted"
+    rows = [_row(opts.mode, name, result.invariants.get(name, name), by_invariant.get(name, []),
+                 so_far if result.interrupted else "no example broke it")
             for name in names]
     failing = sum(1 for r in rows if r["gating"])
     counts = outcome_counts(rows)
@@ -40,6 +46,10 @@ def campaign_document(result: CampaignResult) -> dict[str, Any]:
         + (" / " if opts.examples is not None and opts.time_s is not None else "")
         + (f"{opts.time_s:g} s" if opts.time_s is not None else ""),
     }
+    if result.interrupted:
+        run.update(interrupted=True, interrupted_at=result.interrupted_at,
+                   interrupted_by=result.interrupted_by)
+    verdict = "fail" if failing else INTERRUPTED if result.interrupted else "pass"
     first_capture = next((f.capture for f in result.findings if f.capture is not None), None)
     return {
         "format": FORMAT,
@@ -47,13 +57,14 @@ def campaign_document(result: CampaignResult) -> dict[str, Any]:
         "run": run,
         "identity": None,
         "summary": {"total": len(rows), **counts, "gating_failures": failing,
-                    "verdict": "fail" if failing else "pass"},
+                    "verdict": verdict},
         "gating": {"mode": "default", "regressions": [], "fixed": []},
         "restore": {"status": "skipped",
                     "detail": "a fuzz campaign does not put back the target's plans"},
         "capture": str(first_capture) if first_capture is not None else None,
         "clauses": rows,
         "fuzz": {"mode": opts.mode, "examples": result.examples, "units": result.units,
+                 "interrupted": result.interrupted,
                  "findings": [_finding(f) for f in result.findings]},
     }
 
@@ -62,15 +73,16 @@ def replay_command(finding: Finding) -> str:
     return f"mavconform fuzz --replay {finding.path}"
 
 
-def _row(mode: str, name: str, description: str, findings: list[Finding]) -> dict[str, Any]:
+def _row(mode: str, name: str, description: str, findings: list[Finding], unbroken: str) -> dict[str, Any]:
     failed = bool(findings)
     if failed:
         detail = " | ".join(
             f"{f.case.violation} (saved {f.path}; replay: {replay_command(f)}"
-            + ("" if f.reproduced else "; WARNING: the replay did not reproduce it") + ")"
+            + (f"; {f.note}" if f.note else "" if f.reproduced
+               else "; WARNING: the replay did not reproduce it") + ")"
             for f in findings)
     else:
-        detail = "no example broke it"
+        detail = unbroken
     return {
         "id": row_id(mode, name), "group": f"FUZZ.{mode.upper()}", "level": "MUST",
         "role": "vehicle", "title": description, "source": f"fuzz oracle ({mode} mode)",
@@ -87,5 +99,5 @@ def _finding(f: Finding) -> dict[str, Any]:
         "step": v.step if v else None, "steps": len(f.case.steps), "seed": f.case.seed,
         "case": str(f.path), "capture": str(f.capture) if f.capture else None,
         "reproduced": f.reproduced, "replay": replay_command(f),
-        "name": Path(f.path).stem,
+        "name": Path(f.path).stem, "note": f.note or None,
     }

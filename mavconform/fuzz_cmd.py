@@ -8,16 +8,18 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mavconform.fuzz.campaign import (MODES, RESTART_TIMEOUT, CampaignOptions, Progress, load_mode, parse_duration,
-                           replay_recorded, run_campaign)
+from mavconform.fuzz.campaign import (MODES, RESTART_TIMEOUT, CampaignInterrupted, CampaignOptions, Progress,
+                                      load_mode, parse_duration, replay_recorded, run_campaign)
+from mavconform.conformance.target_uri import parse_target
 from mavconform.fuzz.case import load_case
-from mavconform.fuzz.outcomes import TargetUnresponsive, ToolError
+from mavconform.fuzz.outcomes import TargetUnresponsive, ToolError, interrupts_noted
 from mavconform.reference_impl.errors import UsageError
 
-from .options import seconds_up_to
+from .options import seconds_up_to, sigterm_as_interrupt
 
 EXIT_FINDING = 1
 EXIT_TOOL_ERROR = 3
+EXIT_INTERRUPTED = 130   # 128 + SIGINT, as shells report Ctrl-C
 
 DESCRIPTION = """\
 Fuzz a mission implementation and save what breaks it.
@@ -46,9 +48,16 @@ stops and saves the last steps with the capture of the live traffic. Replaying a
 minimising it needs the target restarted: give --restart-cmd, run (bounded) before every
 attempt; without it the case is saved unminimised and says so.
 
+Ctrl-C or SIGTERM (a CI cancel, `timeout`, `docker stop`) ends a campaign as its budget
+would, at once: the findings seen so far are saved (shrunk as far as the search had got, not
+minimised; over UDP with the live capture, not replayed), the summary is printed and the
+reports are written, marked interrupted (run.interrupted, fuzz.interrupted) with the verdict
+"fail" if something was found, else "interrupted". A second signal while the reports are
+written waits for them, so no report is left half-written.
+
 Exit codes: 0 no finding; 1 a finding (or, with --replay, the case still fails), or the
 target never answered; 2 usage; 3 a tool error (a bug in mavconform: the steps that led to
-it are saved for the bug report).
+it are saved for the bug report); 130 interrupted (Ctrl-C or SIGTERM), findings or not.
 """
 
 EPILOG = """\
@@ -103,13 +112,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.replay:
-        return _replay(args)
+    with sigterm_as_interrupt():   # a CI cancel stops a campaign as Ctrl-C does
+        if args.replay:
+            return _replay(args)   # interrupted: KeyboardInterrupt, 130 (the capture is closed)
+        return _campaign(args)
+
+
+def _campaign(args: argparse.Namespace) -> int:
     if args.capture:
         raise UsageError("--capture goes with --replay (a campaign saves each finding's capture itself)")
     from mavconform.fuzz.report import campaign_document, replay_command
     from mavconform.reports.write import write_reports
 
+    parse_target(args.target)   # a bad address says so before any banner or folder appears
     for option, folder in (("--findings", args.findings), ("--report-dir", args.report_dir)):
         _writable(option, folder)   # before the search: a finding must never be lost to a bad path
     examples = args.examples if args.examples is not None or args.time is not None else DEFAULT_EXAMPLES
@@ -125,8 +140,13 @@ def run(args: argparse.Namespace) -> int:
     bar = None if args.quiet else ProgressLine(unit, sys.stderr)
     try:
         result = run_campaign(options, bar)
+    except CampaignInterrupted as exc:
+        result = exc.result
+    except KeyboardInterrupt:      # before the search began (the campaign raises the above after)
+        print("mavconform fuzz: interrupted before the search began; nothing was fuzzed", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except TargetUnresponsive as exc:
-        print(f"mavconform fuzz: target unresponsive: {exc}; nothing was fuzzed", file=sys.stderr)
+        print(f"mavconform: target unresponsive: {exc}; nothing was fuzzed", file=sys.stderr)
         return EXIT_FINDING
     except ToolError as exc:
         saved = getattr(exc, "saved", None)
@@ -139,17 +159,22 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.done()
-    doc = campaign_document(result)
-    paths = write_reports(doc, args.report_dir, basename="fuzz")
+    with interrupts_noted() as late:   # a signal now waits: no report is left half-written
+        doc = campaign_document(result)
+        paths = write_reports(doc, args.report_dir, basename="fuzz")
     rate = result.examples / result.duration_s if result.duration_s > 0 else 0.0
     urate = result.units / result.duration_s if result.duration_s > 0 else 0.0
     print(f"\n{result.examples} examples (shrinking included), {result.units} {unit} in {result.duration_s:.1f} s "
           f"({rate:.1f} examples/s, {urate:.0f} {unit}/s)")
     checked = ", ".join(result.invariants) or "(the mode's oracles)"
     print(f"invariants checked: {checked}")
+    if result.interrupted:
+        by = f" by {result.interrupted_by}" if result.interrupted_by else ""
+        print(f"interrupted{by} during {result.interrupted_at}: the search did not finish; "
+              f"verdict {doc['summary']['verdict']}")
     if not result.findings:
         print(f"findings: none; reports in {paths['json'].parent}/")
-        return 0
+        return _interrupted(result.interrupted_at) if result.interrupted or late else 0
     print(f"findings: {len(result.findings)}")
     for f in result.findings:
         print(f"  {f.case.violation}")
@@ -159,7 +184,17 @@ def run(args: argparse.Namespace) -> int:
             print(f"    {f.note}")
         print(f"    replay: {replay_command(f)}")
     print(f"reports in {paths['json'].parent}/")
-    return 1
+    return _interrupted(result.interrupted_at) if result.interrupted or late else 1
+
+
+def _interrupted(where: str | None) -> int:
+    if where is None:   # the signal came while the reports were written: they are whole
+        print("mavconform fuzz: interrupted after the campaign had finished; its reports are complete",
+              file=sys.stderr)
+    else:
+        print(f"mavconform fuzz: interrupted during {where}; the findings seen are saved and the "
+              "reports written, marked interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -177,7 +212,7 @@ def _replay(args: argparse.Namespace) -> int:
     except UsageError as exc:
         raise UsageError(f"{args.replay}: {exc}") from None
     except TargetUnresponsive as exc:
-        print(f"mavconform fuzz: target unresponsive: {exc}; nothing was replayed (restart it first)",
+        print(f"mavconform: target unresponsive: {exc}; nothing was replayed (restart it first)",
               file=sys.stderr)
         return EXIT_FINDING
     if violation is None:

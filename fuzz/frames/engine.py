@@ -7,7 +7,8 @@ virtual time with a fresh vehicle per example; a failing example is shrunk by Hy
 then `minimise` drops every step and frame the failure does not need (by replaying), and
 the result is replayed once more to make sure the saved case reproduces. UDP targets keep
 one live target for the campaign: no shrinking (a broken target stays broken), the first
-failing example is the case.
+failing example is the case. An interrupt (Ctrl-C) raises `SearchInterrupted` with the
+finding being shrunk or minimised, as small as it had become, so it is never lost.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ from hypothesis.errors import HypothesisException
 
 from mavconform.conformance.target_uri import TargetUri, parse_target
 from mavconform.fuzz.case import Case, Violation
-from mavconform.fuzz.outcomes import TargetUnresponsive, ToolError, ToolFailure
+from mavconform.fuzz.outcomes import (SearchInterrupted, TargetUnresponsive, ToolError, ToolFailure,
+                                      caused_by_interrupt)
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
@@ -107,20 +109,32 @@ class FrameCampaign:
         self.capture = capture            # sees the live traffic of a UDP campaign
         self.profile = profile            # UDP targets: the profile whose stored form downloads are judged in
         self.failure: ToolFailure | None = None   # an exception of ours ended the campaign
+        self.pending: Case | None = None          # the finding being shrunk or minimised
 
     # --- the campaign ---------------------------------------------------------------------
     def run(self) -> list[Case]:
-        started = time.monotonic()
-        if not self.virtual:
-            self.rig = Rig(self.uri, seed=self.seed, virtual=False, scale=self.scale, capture=self.capture,
-                           profile=self.profile)
-            v = self.rig.start()
-            if v is not None:
-                self.rig.close()
-                if v.invariant == "target-crash" and self.rig.frames_sent == 0:
-                    raise TargetUnresponsive(v.detail)
-                return [self._case([setup_step(False)], v, shrunk=False)]
+        """The findings (at most one); an interrupt raises `SearchInterrupted` with the one
+        being shrunk or minimised, if any, as small as it had become."""
         try:
+            return self._run()
+        except BaseException as exc:
+            if not caused_by_interrupt(exc):
+                raise
+            pending = self.pending
+            raise SearchInterrupted([pending] if pending is not None else [],
+                                    phase="search" if pending is None else "shrinking") from None
+
+    def _run(self) -> list[Case]:
+        started = time.monotonic()
+        try:
+            if not self.virtual:
+                self.rig = Rig(self.uri, seed=self.seed, virtual=False, scale=self.scale, capture=self.capture,
+                               profile=self.profile)
+                v = self.rig.start()
+                if v is not None:
+                    if v.invariant == "target-crash" and self.rig.frames_sent == 0:
+                        raise TargetUnresponsive(v.detail)
+                    return [self._case([setup_step(False)], v, shrunk=False)]
             chunk = 0
             while self.max_examples is None or self.examples < self.max_examples:
                 if self.stop_after is not None and time.monotonic() - started >= self.stop_after:
@@ -162,6 +176,7 @@ class FrameCampaign:
                 exc = _found(violation, steps)
                 if not first:
                     first.append(exc)
+                self._note(violation, steps)
                 raise exc
 
         example._hypothesis_internal_database_key = (  # type: ignore[attr-defined]
@@ -233,8 +248,17 @@ class FrameCampaign:
             self.on_example(sent)
 
     # --- findings -------------------------------------------------------------------------
+    def _note(self, violation: Violation, steps: list[dict[str, Any]]) -> None:
+        """Keep the smallest failing example of the first invariant seen: what an interrupt
+        saves while Hypothesis shrinks it."""
+        old = self.pending
+        if old is None or (old.violation is not None and old.violation.invariant == violation.invariant
+                           and _frames(steps) < _frames(list(old.steps))):
+            self.pending = self._case(steps, violation, shrunk=False)
+
     def _finish(self, found: _Found) -> Case:
         case = self._case(found.steps, found.violation, shrunk=True)
+        self.pending = case
         small = minimise(case)
         again = replay(small)
         if again is None or again.invariant != found.violation.invariant:
@@ -246,6 +270,10 @@ class FrameCampaign:
         return Case(MODE, self.target, self.seed, tuple(steps), violation,
                     {"campaign_seed": self.seed, "examples": self.examples, "frames": self.frames_sent,
                      "transport": "virtual" if self.virtual else "udp", "shrunk": shrunk})
+
+
+def _frames(steps: list[dict[str, Any]]) -> int:
+    return sum(len(step.get("send", ())) for step in steps)
 
 
 def search(target: str, *, seed: int, max_examples: int | None = None, stop_after: float | None = None,

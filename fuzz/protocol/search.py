@@ -14,6 +14,11 @@ UDP targets: one connection (socket, discovered target, HEARTBEAT watch) serves 
 campaign, and findings reach the search through the `CampaignState`, not as exceptions
 (machine.py says why). A target that never says HEARTBEAT raises `TargetUnresponsive`; an
 exception of our own raises `ToolError` with the steps that led to it.
+
+Interrupts: Ctrl-C (or SIGTERM, made one by the CLI) raises `SearchInterrupted` with the
+findings seen so far: Hypothesis lets a KeyboardInterrupt through at once, even while it
+shrinks, so every failing example is noted as it happens and the smallest per invariant
+is handed over, shrunk as far as Hypothesis got.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
 from ..case import Case, Violation
-from ..outcomes import ToolError
+from ..outcomes import SearchInterrupted, ToolError, caused_by_interrupt
 from .connection import TargetConnection
 from .machine import CampaignOver, CampaignState, Finding, Knobs, machine_class
 from .steps import Runner
@@ -95,29 +100,41 @@ def _search(knobs: Knobs, seed: int, max_examples: int | None, deadline: float |
     done = 0
     chunk = 0
     rate = 0.0   # examples per second so far, to size the next chunk
-    while True:
-        left = None if max_examples is None else max_examples - done
-        if (left is not None and left <= 0) or (deadline is not None and time.monotonic() >= deadline):
-            return []
-        first = FIRST_CHUNK if parse_target(knobs.target).in_process else FIRST_CHUNK_UDP
-        size = left if deadline is None else _chunk_size(rate, deadline - time.monotonic(), left, first)
-        counted = [0]
+    seen: dict[str, Finding] = {}   # the smallest failing example per invariant, as it shrinks
 
-        def example_done(units: int) -> None:
-            counted[0] += 1
-            if on_example is not None:
-                on_example(units)
+    def example_done(units: int) -> None:
+        nonlocal done
+        done += 1
+        if on_example is not None:
+            on_example(units)
 
-        t0 = time.monotonic()
-        found = _run_chunk(knobs, seed, chunk, size, database, example_done, deadline, state)
-        if state.failure is not None:
-            raise ToolError(state.failure)
-        found = found or state.findings
-        done += counted[0]
-        rate = counted[0] / max(time.monotonic() - t0, 1e-6)
-        if found:
-            return [_case(f, knobs, seed, chunk, done) for f in found]
-        chunk += 1
+    def saw(found: Finding) -> None:
+        old = seen.get(found.violation.invariant)
+        if old is None or len(found.steps) < len(old.steps):
+            seen[found.violation.invariant] = found
+
+    try:
+        while True:
+            left = None if max_examples is None else max_examples - done
+            if (left is not None and left <= 0) or (deadline is not None and time.monotonic() >= deadline):
+                return []
+            first = FIRST_CHUNK if parse_target(knobs.target).in_process else FIRST_CHUNK_UDP
+            size = left if deadline is None else _chunk_size(rate, deadline - time.monotonic(), left, first)
+            t0, before = time.monotonic(), done
+            found = _run_chunk(knobs, seed, chunk, size, database, example_done, deadline, state, saw)
+            if state.failure is not None:
+                raise ToolError(state.failure)
+            found = found or state.findings
+            rate = (done - before) / max(time.monotonic() - t0, 1e-6)
+            if found:
+                return [_case(f, knobs, seed, chunk, done) for f in found]
+            chunk += 1
+    except KeyboardInterrupt:
+        # Hypothesis lets an interrupt through at once, shrinking or not: hand the campaign
+        # what was seen (over UDP the side channel has it; in-process the smallest so far).
+        found = state.findings or list(seen.values())
+        raise SearchInterrupted([_case(f, knobs, seed, chunk, done) for f in found],
+                                phase="shrinking" if seen and not state.findings else "search") from None
 
 
 def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | None:
@@ -151,8 +168,10 @@ def _chunk_size(rate: float, time_left: float, left: int | None, first: int = FI
 
 def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: ExampleDatabase | None,
                on_example: Callable[[int], None], stop_at: float | None = None,
-               state: CampaignState | None = None) -> list[Finding]:
-    machine = machine_class(knobs, on_example=on_example, stop_at=stop_at, state=state)
+               state: CampaignState | None = None,
+               on_finding: Callable[[Finding], None] | None = None) -> list[Finding]:
+    machine = machine_class(knobs, on_example=on_example, on_finding=on_finding, stop_at=stop_at,
+                            state=state)
     test = get_state_machine_test(machine, settings=settings(
         max_examples=size, stateful_step_count=knobs.steps, deadline=None, database=database,
         derandomize=False, suppress_health_check=list(HealthCheck), verbosity=Verbosity.quiet,
@@ -167,9 +186,13 @@ def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: Example
     try:
         test()
     except BaseException as exc:   # noqa: BLE001 - sorted below: findings, or re-raised
+        if caused_by_interrupt(exc):   # before CampaignOver: it may be what Hypothesis handled
+            raise KeyboardInterrupt from exc
         if _ended_by_us(exc):
             return []              # what the campaign found is in its state
         findings, others = _split(exc)
+        if any(caused_by_interrupt(o) for o in others):
+            raise KeyboardInterrupt from exc
         if others or not findings:
             raise
         return _smallest_per_invariant(findings)

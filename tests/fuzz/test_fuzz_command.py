@@ -241,3 +241,12 @@ def test_an_exception_outside_any_example_is_a_tool_error_too(tmp_path, capsys, 
     assert "tool error" in err and "planted failure in the search loop" in err and "Traceback" not in err
     (saved,) = found.glob("protocol-tool-error-*.json")
     assert "planted failure" in saved.with_suffix(".txt").read_text()
+
+
+def test_a_bad_target_is_refused_before_any_banner_or_folder(tmp_path, capsys) -> None:
+    code = main(["fuzz", "--target", "udp:1.2.3:5", "--findings", str(tmp_path / "found"),
+                 "--report-dir", str(tmp_path / "rep")])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith("mavconform: error: ") and "1.2.3" in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
