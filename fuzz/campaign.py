@@ -494,6 +494,8 @@ def replay_recorded(mode: ModuleType, case: Case,
         if capture is not None:
             capture(record)
 
+    if capture is not None:
+        hook.mark = capture.mark   # type: ignore[attr-defined]  # step markers in the capture
     try:
         violation = mode.replay(case, capture=hook)
     except UsageError:

@@ -14,7 +14,8 @@ per-direction `LinkStats` (`sent` = datagrams into the proxy, `delivered` = out 
 reports every datagram to capture hooks as the link it stands for: `tx` when the sender's
 datagram reaches the proxy, `drop` when a fault (or a full delay queue) eats it, `rx` when
 a copy, possibly corrupted, leaves for its destination; source and destination are the GCS
-and the vehicle, so an `McapCapture` gets one channel per direction and GCS.
+and the vehicle, so an `McapCapture` gets one channel per direction and GCS (a frame's `rx`
+copy is kept only when it differs from its `tx`: a duplicate or a corrupted one).
 
 Two adapters move its datagrams:
 - `UdpProxy`: on a `UdpDriver`, the listen socket plus one socket per leg, opened when a

@@ -19,7 +19,8 @@ Sit between a GCS and a vehicle as a bad radio link. The GCS sends to --listen; 
 sends each datagram on to the vehicle at --forward from a port of its own (one per GCS, so
 several GCSs can share the vehicle and each gets its own replies), and sends the vehicle's
 replies back to that GCS from the listen port. Every datagram, both ways, goes through the
-link faults below and, with --capture, into an MCAP file (one channel per direction).
+link faults below and, with --capture, into an MCAP file (each frame once, one channel per
+direction per GCS, frames the faults dropped on '... (lost)').
 Runs until Ctrl-C (or SIGTERM) or --duration, then prints per-direction counts. Exit 0, or 2 for a
 usage mistake.
 """

@@ -147,8 +147,11 @@ def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | Non
         raise UsageError(f"found_by.profile: expected a profile name or file, got {profile!r:.40}")
     runner = Runner(case.target, case.seed, capture=capture, atomic=case.found_by.get("atomic"),
                     profile=profile)
+    mark = getattr(capture, "mark", None)   # a capture that labels where each step starts
     try:
-        for step in case.steps:
+        for i, step in enumerate(case.steps):
+            if mark is not None:
+                mark(f"step {i}: {step['op']}", clock=runner.world.driver.clock)
             violation = runner.apply(step) or runner.check()
             if violation is not None:
                 return violation

@@ -250,3 +250,18 @@ def test_a_bad_target_is_refused_before_any_banner_or_folder(tmp_path, capsys) -
     assert code == 2 and out == ""
     assert err.startswith("mavconform: error: ") and "1.2.3" in err and err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_protocol_finding_replays_with_a_marker_per_step(tmp_path, capsys) -> None:
+    from mcap.reader import make_reader
+    assert _fuzz(tmp_path, "--target", "mutant:non-atomic-upload", "--mode", "protocol", "--examples", "300",
+                 "--seed", "1") == 1
+    (case_path,) = sorted((tmp_path / "found").glob("*.json"))
+    steps = load_case(case_path).steps
+    capture = tmp_path / "again.mcap"
+    assert main(["fuzz", "--replay", str(case_path), "--capture", str(capture)]) == 1
+    with open(capture, "rb") as f:
+        marks = [json.loads(m.data)["message"] for _, ch, m in make_reader(f).iter_messages() if ch.topic == "markers"]
+    assert marks[0] == f"step 0: {steps[0]['op']}" and len(marks) <= len(steps)
+    assert marks == [f"step {i}: {s['op']}" for i, s in enumerate(steps[:len(marks)])]
+    capsys.readouterr()
