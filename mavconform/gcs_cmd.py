@@ -8,6 +8,7 @@ import sys
 from typing import Iterator
 
 from mavconform.reference_impl.files import Plan, check_writable, load_plan, plan_from_items, plan_types_in, save_plan
+from mavconform.reference_impl.files.from_vehicle import facts_from_gcs
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
 from mavconform.reference_impl.mission.adaptations import NAMED
 from mavconform.reference_impl.mission.items import MissionType
@@ -117,8 +118,9 @@ def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -
         results = [session.download(t) for t in plan_types_in(args.file)]
         if all(r.ok for r in results):
             got = {r.mission_type: list(r.items) for r in results}
+            home, settings = facts_from_gcs(session.gcs)   # HEARTBEAT identity, home (QGC needs both)
             save_plan(plan_from_items(got.get(MissionType.MISSION, ()), got.get(MissionType.FENCE, ()),
-                                      got.get(MissionType.RALLY, ())), args.file)
+                                      got.get(MissionType.RALLY, ()), home, settings), args.file)
             print(f"wrote {args.file}")
         return results
     if args.operation == "clear":

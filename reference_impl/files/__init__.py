@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mavconform.reference_impl.files.plan import Plan, PlanFileError, plan_from_items
+from mavconform.reference_impl.files.plan import MissionSettings, Plan, PlanFileError, plan_from_items
 from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType
 from mavconform.reference_impl.files.qgc_plan import format_qgc_plan, parse_qgc_plan
 from mavconform.reference_impl.files.wpl import HEADER as WPL_HEADER, format_wpl, looks_like_wpl, parse_wpl
 
-__all__ = ["Plan", "PlanFileError", "check_writable", "load_plan", "plan_from_items", "plan_types_in",
+__all__ = ["MissionSettings", "Plan", "PlanFileError", "check_writable", "load_plan", "plan_from_items", "plan_types_in",
            "save_plan", "SAMPLES_DIR"]
 
 SAMPLES_DIR = Path(__file__).parent / "samples"

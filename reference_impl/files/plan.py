@@ -29,6 +29,21 @@ class PlanFileError(UsageError):
 
 
 @dataclass(frozen=True)
+class MissionSettings:
+    """What a .plan says about the vehicle the plan is for (QGC's mission settings).
+
+    QGC's loader requires `firmwareType` and reads the rest; the defaults are what QGC
+    writes for an offline plan with no vehicle: MAV_AUTOPILOT_GENERIC, MAV_TYPE_GENERIC and
+    its offline-editing speeds (QGC AppSettings offlineEditingCruiseSpeed / HoverSpeed).
+    A download fills the types from the vehicle's HEARTBEAT (autopilot, type)."""
+
+    firmware_type: int = 0           # MAV_AUTOPILOT
+    vehicle_type: int = 0            # MAV_TYPE
+    cruise_speed: float = 15.0       # m/s
+    hover_speed: float = 5.0         # m/s
+
+
+@dataclass(frozen=True)
 class Plan:
     """Mission, fence and rally items as one unit, as a GCS plan file holds them."""
 
@@ -36,6 +51,10 @@ class Plan:
     fence: list[MissionItem] = field(default_factory=list)
     rally: list[MissionItem] = field(default_factory=list)
     home: tuple[float, float, float] | None = None  # lat, lon, alt (.plan plannedHomePosition)
+    settings: MissionSettings = MissionSettings()
+    # What reading left out on purpose and the user should hear about (e.g. a version-1
+    # geoFence, skipped as QGC skips it). Not part of the plan: equal plans may differ here.
+    notes: tuple[str, ...] = field(default=(), compare=False)
 
     def items(self, t: MissionType) -> list[MissionItem]:
         """The items of one plan kind (MISSION, FENCE or RALLY)."""
@@ -58,6 +77,8 @@ def plan_from_items(
     fence: Iterable[MissionItem] = (),
     rally: Iterable[MissionItem] = (),
     home: tuple[float, float, float] | None = None,
+    settings: MissionSettings = MissionSettings(),
+    notes: Iterable[str] = (),
 ) -> Plan:
     """A plan whose lists are numbered 0..n-1 and carry their mission_type, whatever came in."""
     return Plan(
@@ -65,6 +86,8 @@ def plan_from_items(
         fence=renumber(fence, MissionType.FENCE),
         rally=renumber(rally, MissionType.RALLY),
         home=home,
+        settings=settings,
+        notes=tuple(notes),
     )
 
 

@@ -1,12 +1,17 @@
 """QGroundControl's .plan JSON: mission, geofence and rally points in one file.
 
-QGroundControl is the reference for what the file means. SimpleItem params are the raw
-command params (params[4]/[5] are lat/lon only in global frames, so they are scaled by the
-item's frame). Fence and rally items are built the way QGC's GeoFenceManager and
-RallyPointManager build them for an upload: polygon vertices, then circles, then the
-breach-return point; autocontinue off. Reading yields exactly those items; writing accepts
-any order that groups into the same shapes. So `load(save(plan)) == plan` holds for every
-plan in that form.
+QGroundControl is the reference for what the file means, and its loader for what a file
+must hold (PlanMasterController::_loadPlanJson, JsonHelper::validateExternalQGCJsonFile,
+MissionController::_loadJsonMissionFileV2, GeoFenceController::load,
+RallyPointController::load): every key it requires is written (`REQUIRED_KEYS`). Mission
+items are QGC's SimpleItems (qgc_items.py). Fence and rally items are built the way QGC's
+GeoFenceManager and RallyPointManager build them for an upload: polygon vertices, then
+circles, then the breach-return point; autocontinue off. Reading yields exactly those items;
+writing accepts any order that groups into the same shapes. So `load(save(plan)) == plan`
+holds for every plan in that form that has a home (one without gets `fallback_home`).
+
+A version-1 geoFence or rallyPoints block (an old QGC's) is skipped, as QGC skips it, with
+a note on the plan.
 """
 
 from __future__ import annotations
@@ -17,104 +22,50 @@ from decimal import Decimal
 from typing import Any, NoReturn
 
 from mavconform.reference_impl.files.plan import (
-    Plan, PlanFileError, float32_from_decimal, float32_text, plan_from_items, xy_decimals,
+    MissionSettings, Plan, PlanFileError, float32_from_decimal, plan_from_items,
     xy_from_decimal, xy_to_decimal,
 )
+from mavconform.reference_impl.files.qgc_items import (
+    ALT_MODE_MIXED, ALT_MODE_NONE, ALT_MODE_RELATIVE, items_json, read_items,
+)
+from mavconform.reference_impl.files.qgc_json import Coordinate, Home, JsonReader, JsonWriter
+from mavconform.reference_impl.mission.commands import LOCATION_COMMANDS
 from mavconform.reference_impl.mission.constants import Cmd
-from mavconform.reference_impl.mission.items import GLOBAL_FRAMES, MissionItem, MissionType
+from mavconform.reference_impl.mission.items import GLOBAL_FRAMES, MissionItem
 from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 FILE_VERSION = 1
 MISSION_VERSION = 2
 GEOFENCE_VERSION = 2
 RALLY_VERSION = 2
+SKIPPED_VERSION = 1  # of geoFence / rallyPoints: QGC ignores such a block ("old version 1 data")
 SHAPE_VERSION = 1  # of each polygon and circle
 FRAME_GLOBAL = _d.MAV_FRAME_GLOBAL  # polygon vertices and circle centres (as QGC uploads them)
 FRAME_GLOBAL_RELATIVE_ALT = _d.MAV_FRAME_GLOBAL_RELATIVE_ALT  # rally and breach-return points (as QGC uploads them)
-PARAM_COUNT = 7
 VERTEX_COMMAND = {True: Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION,
                   False: Cmd.NAV_FENCE_POLYGON_VERTEX_EXCLUSION}
 CIRCLE_COMMAND = {True: Cmd.NAV_FENCE_CIRCLE_INCLUSION, False: Cmd.NAV_FENCE_CIRCLE_EXCLUSION}
-
-# Written because QGC requires these keys; the Plan model does not carry them (QGC defaults).
-WRITTEN_MISSION_SETTINGS = {
-    "cruiseSpeed": 15,
-    "firmwareType": 0,  # MAV_AUTOPILOT_GENERIC
-    "hoverSpeed": 5,
-    "vehicleType": 0,  # MAV_TYPE_GENERIC
+GROUND_STATION = "mavconform"
+# Every key QGC's loader requires, by JSON path (a test holds written files to it). Source:
+# QGC PlanMasterController::_loadPlanJson (mission, geoFence, rallyPoints objects),
+# JsonHelper::validateExternalQGCJsonFile / validateInternalQGCJsonFile (groundStation,
+# fileType, version), MissionController::_loadJsonMissionFileV2 (plannedHomePosition,
+# items, firmwareType), MissionItem::load (type, frame, command, params, autoContinue),
+# GeoFenceController::load (version, circles, polygons), RallyPointController::load
+# (version, points).
+REQUIRED_KEYS: dict[str, tuple[str, ...]] = {
+    "$": ("fileType", "geoFence", "groundStation", "mission", "rallyPoints", "version"),
+    "$.mission": ("firmwareType", "items", "plannedHomePosition"),
+    "$.mission.items[]": ("autoContinue", "command", "frame", "params", "type"),
+    "$.geoFence": ("circles", "polygons", "version"),
+    "$.rallyPoints": ("points", "version"),
 }
-
-Coordinate = tuple[Decimal, Decimal, Decimal]
-Home = tuple[float, float, float]
+# QGeoCoordinate::atDistanceAndAzimuth's earth radius (Qt qgeocoordinate.cpp), metres
+_QT_EARTH_MEAN_RADIUS = 6371.0072e3
+FALLBACK_HOME_OFFSET = 30.0  # m north of the first location, as QGC places a plan's home
 
 
 # --- reading -------------------------------------------------------------------------------
-
-class _Reader:
-    """Typed access to the parsed document; every problem names its JSON path."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def fail(self, path: str, problem: str) -> NoReturn:
-        raise PlanFileError(f"{self.source}: {path}: {problem}")
-
-    def check(self, value: Any, path: str, kind: str) -> Any:
-        """`value` if it is a JSON `kind`: object, array, bool, string, number, integer.
-
-        Numbers come back as Decimal (every written digit kept), integers as int.
-        """
-        if isinstance(value, (int, Decimal)) and not isinstance(value, bool):
-            number = Decimal(value)
-            if kind == "number":
-                return number
-            if (kind == "integer" and number.is_finite() and number.adjusted() < 20
-                    and number == number.to_integral_value()):
-                return int(number)  # (1e400 is refused above rather than built as an int)
-        python_type = {"object": dict, "array": list, "bool": bool, "string": str}.get(kind)
-        if python_type is not None and isinstance(value, python_type):
-            return value
-        article = "an" if kind[0] in "aeiou" else "a"
-        self.fail(path, f"expected {article} {kind}, found {_describe(value)}")
-
-    def member(self, obj: dict, key: str, path: str, kind: str) -> Any:
-        if key not in obj:
-            self.fail(f"{path}.{key}", "missing required key")
-        return self.check(obj[key], f"{path}.{key}", kind)
-
-    def integer_in(self, obj: dict, key: str, path: str, high: int) -> int:
-        value = self.member(obj, key, path, "integer")
-        if not 0 <= value <= high:
-            self.fail(f"{path}.{key}", f"{value} is outside 0..{high}")
-        return value
-
-    def version(self, obj: dict, path: str, expected: int) -> None:
-        if (found := self.member(obj, "version", path, "integer")) != expected:
-            self.fail(f"{path}.version", f"unsupported version {found} (expected {expected})")
-
-    def coordinate(self, value: Any, path: str, with_altitude: bool) -> Coordinate:
-        """[lat, lon] or [lat, lon, alt] (degrees, metres); alt is 0 where not carried."""
-        values = self.check(value, path, "array")
-        if len(values) != (3 if with_altitude else 2):
-            shape = "[lat, lon, alt]" if with_altitude else "[lat, lon]"
-            self.fail(path, f"expected {shape}, found {len(values)} values")
-        numbers = [self.check(v, f"{path}[{i}]", "number") for i, v in enumerate(values)]
-        for index, (name, limit) in enumerate((("latitude", 90), ("longitude", 180))):
-            if not (numbers[index].is_finite() and -limit <= numbers[index] <= limit):
-                self.fail(f"{path}[{index}]",
-                          f"{name} {numbers[index]} is outside [-{limit}, {limit}]")
-        if with_altitude and not numbers[2].is_finite():
-            self.fail(f"{path}[2]", f"altitude {numbers[2]} is not finite")
-        return numbers[0], numbers[1], numbers[2] if with_altitude else Decimal(0)
-
-
-def _describe(value: Any) -> str:
-    for python_type, name in ((bool, "a bool"), (dict, "an object"), (list, "an array"),
-                              (str, "a string"), (type(None), "null")):
-        if isinstance(value, python_type):
-            return name
-    return f"the number {value}"
-
 
 def parse_qgc_plan(text: str, source: str) -> Plan:
     """The plan in .plan JSON; `source` names the file in errors ("FILE: $.path: problem")."""
@@ -124,22 +75,37 @@ def parse_qgc_plan(text: str, source: str) -> Plan:
     except json.JSONDecodeError as error:
         raise PlanFileError(f"{source}: line {error.lineno} column {error.colno}: "
                             f"invalid JSON: {error.msg}") from None
-    reader = _Reader(source)
+    reader = JsonReader(source)
     root = reader.check(document, "$", "object")
     if (file_type := reader.member(root, "fileType", "$", "string")) != "Plan":
         reader.fail("$.fileType", f"expected 'Plan', found {file_type!r}")
     reader.version(root, "$", FILE_VERSION)
-    mission, home = _read_mission(reader, reader.member(root, "mission", "$", "object"))
+    reader.optional(root, "groundStation", "$", "string")
+    mission, home, settings = _read_mission(reader, reader.member(root, "mission", "$", "object"))
     fence: list[MissionItem] = []
     rally: list[MissionItem] = []
-    if "geoFence" in root:  # optional, as in QGC
-        fence = _read_fence(reader, reader.member(root, "geoFence", "$", "object"))
+    notes: list[str] = []
+    if "geoFence" in root:  # optional here (QGC requires it; every file it writes has it)
+        obj = reader.member(root, "geoFence", "$", "object")
+        if obj.get("version", SKIPPED_VERSION) == SKIPPED_VERSION:   # QGC: version 1 "or prior"
+            notes.append(_skipped(source, "$.geoFence", "fence"))
+        else:
+            fence = _read_fence(reader, obj)
     if "rallyPoints" in root:
-        rally = _read_rally(reader, reader.member(root, "rallyPoints", "$", "object"))
-    return plan_from_items(mission, fence, rally, home)
+        obj = reader.member(root, "rallyPoints", "$", "object")
+        if obj.get("version") == SKIPPED_VERSION:
+            notes.append(_skipped(source, "$.rallyPoints", "rally points"))
+        else:
+            rally = _read_rally(reader, obj)
+    return plan_from_items(mission, fence, rally, home, settings, notes)
 
 
-def _read_mission(reader: _Reader, obj: dict) -> tuple[list[MissionItem], Home | None]:
+def _skipped(source: str, path: str, what: str) -> str:
+    return (f"{source}: {path}: version 1 (an old QGroundControl's format) is skipped, as "
+            f"QGroundControl skips it: the plan has no {what}, and uploading it clears the vehicle's {what}")
+
+
+def _read_mission(reader: JsonReader, obj: dict) -> tuple[list[MissionItem], Home | None, MissionSettings]:
     path = "$.mission"
     reader.version(obj, path, MISSION_VERSION)
     home = None
@@ -147,40 +113,29 @@ def _read_mission(reader: _Reader, obj: dict) -> tuple[list[MissionItem], Home |
         lat, lon, alt = reader.coordinate(obj["plannedHomePosition"],
                                           f"{path}.plannedHomePosition", with_altitude=True)
         home = (float(lat), float(lon), float(alt))
+    defaults = MissionSettings()
+    settings = MissionSettings(
+        firmware_type=_optional_integer(reader, obj, "firmwareType", path, 255, defaults.firmware_type),
+        vehicle_type=_optional_integer(reader, obj, "vehicleType", path, 255, defaults.vehicle_type),
+        cruise_speed=_optional_speed(reader, obj, "cruiseSpeed", path, defaults.cruise_speed),
+        hover_speed=_optional_speed(reader, obj, "hoverSpeed", path, defaults.hover_speed),
+    )
+    _optional_integer(reader, obj, "globalPlanAltitudeMode", path, ALT_MODE_NONE, 0)  # checked only
     items = reader.member(obj, "items", path, "array")
-    return [_read_simple_item(reader, item, f"{path}.items[{index}]")
-            for index, item in enumerate(items)], home
+    return read_items(reader, items, f"{path}.items"), home, settings
 
 
-def _read_simple_item(reader: _Reader, value: Any, path: str) -> MissionItem:
-    obj = reader.check(value, path, "object")
-    item_type = reader.member(obj, "type", path, "string")
-    if item_type == "ComplexItem":
-        name = obj.get("complexItemType")
-        what = f"ComplexItem ({name})" if isinstance(name, str) else "ComplexItem"
-        reader.fail(path, f"{what} is not supported; "
-                          "convert it to simple items in QGroundControl first")
-    if item_type != "SimpleItem":
-        reader.fail(f"{path}.type", f"unknown item type {item_type!r} (expected 'SimpleItem')")
-    command = reader.integer_in(obj, "command", path, 65535)
-    frame = reader.integer_in(obj, "frame", path, 255)
-    autocontinue = reader.member(obj, "autoContinue", path, "bool")
-    if "doJumpId" in obj:  # QGC's 1-based item number; items here are numbered by position
-        reader.member(obj, "doJumpId", path, "integer")
-    raw_params = reader.member(obj, "params", path, "array")
-    if len(raw_params) != PARAM_COUNT:
-        reader.fail(f"{path}.params", f"expected {PARAM_COUNT} params, found {len(raw_params)}")
-    params = [Decimal("NaN") if raw is None else reader.check(raw, f"{path}.params[{i}]", "number")
-              for i, raw in enumerate(raw_params)]  # null is how QGC writes NaN
-    xy = [xy_from_decimal(frame, params[4]), xy_from_decimal(frame, params[5])]
-    for index, scaled in zip((4, 5), xy):
-        if scaled is None:
-            reader.fail(f"{path}.params[{index}]", f"{params[index]} does not fit "
-                        f"MISSION_ITEM_INT's int32 {'xy'[index - 4]} in frame {frame}")
-    p1, p2, p3, p4, z = (float32_from_decimal(params[i]) for i in (0, 1, 2, 3, 6))
-    return MissionItem(seq=0, frame=frame, command=command, param1=p1, param2=p2, param3=p3,
-                       param4=p4, x=xy[0], y=xy[1], z=z, autocontinue=int(autocontinue),
-                       mission_type=MissionType.MISSION)
+def _optional_integer(reader: JsonReader, obj: dict, key: str, path: str, high: int, default: int) -> int:
+    return reader.integer_in(obj, key, path, high) if key in obj else default
+
+
+def _optional_speed(reader: JsonReader, obj: dict, key: str, path: str, default: float) -> float:
+    if key not in obj:
+        return default
+    value = reader.member(obj, key, path, "number")
+    if not (value.is_finite() and value >= 0):
+        reader.fail(f"{path}.{key}", f"a speed must be a finite number >= 0, found {value}")
+    return float(value)
 
 
 def _position_item(command: int, frame: int, where: Coordinate, param1: float = 0.0) -> MissionItem:
@@ -192,7 +147,7 @@ def _position_item(command: int, frame: int, where: Coordinate, param1: float = 
                        z=float32_from_decimal(alt), autocontinue=0)
 
 
-def _read_fence(reader: _Reader, obj: dict) -> list[MissionItem]:
+def _read_fence(reader: JsonReader, obj: dict) -> list[MissionItem]:
     path = "$.geoFence"
     reader.version(obj, path, GEOFENCE_VERSION)
     items = []
@@ -228,7 +183,7 @@ def _read_fence(reader: _Reader, obj: dict) -> list[MissionItem]:
     return items
 
 
-def _read_rally(reader: _Reader, obj: dict) -> list[MissionItem]:
+def _read_rally(reader: JsonReader, obj: dict) -> list[MissionItem]:
     path = "$.rallyPoints"
     reader.version(obj, path, RALLY_VERSION)
     return [_position_item(Cmd.NAV_RALLY_POINT, FRAME_GLOBAL_RELATIVE_ALT,
@@ -238,60 +193,15 @@ def _read_rally(reader: _Reader, obj: dict) -> list[MissionItem]:
 
 # --- writing -------------------------------------------------------------------------------
 
-class _Writer:
-    """Builds the JSON document; refuses what the reader would refuse, naming the item."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def fail(self, where: str, problem: str) -> NoReturn:
-        raise PlanFileError(f"{self.source}: {where}: {problem}")
-
-    def float32(self, value: float, where: str) -> int | float | None:
-        """A float32 as a JSON number with the fewest digits; NaN is null, as QGC writes it."""
-        if math.isnan(value):
-            return None
-        if math.isinf(value):
-            self.fail(where, f"{value} cannot be written: JSON has no infinity")
-        text = float32_text(value)  # integral values come back as plain digits: write an int
-        return int(text) if text.lstrip("-").isdigit() else float(text)
-
-    def finite_float32(self, value: float, where: str, what: str) -> int | float:
-        number = self.float32(value, where)
-        if number is None:
-            self.fail(where, f"{what} is NaN")
-        return number
-
-    def lat_lon(self, item: MissionItem, where: str) -> list[float]:
-        if item.frame not in GLOBAL_FRAMES:
-            self.fail(where, f"frame {item.frame} is not a global frame; a .plan file stores "
-                             "fence and rally positions as latitude/longitude")
-        lat = float(xy_to_decimal(item.frame, item.x))
-        lon = float(xy_to_decimal(item.frame, item.y))
-        return self.checked_lat_lon(lat, lon, where)
-
-    def checked_lat_lon(self, lat: float, lon: float, where: str) -> list[float]:
-        if not -90 <= lat <= 90:
-            self.fail(where, f"latitude {lat} is outside [-90, 90]")
-        if not -180 <= lon <= 180:
-            self.fail(where, f"longitude {lon} is outside [-180, 180]")
-        return [lat, lon]
-
-    def in_range(self, value: int, high: int, name: str, where: str) -> int:
-        if not 0 <= value <= high:
-            self.fail(where, f"{name} {value} is outside 0..{high}")
-        return value
-
-
 def format_qgc_plan(plan: Plan, source: str) -> str:
     """.plan JSON for the whole plan, in QGC's layout (keys sorted, 4-space indent)."""
-    writer = _Writer(source)
+    writer = JsonWriter(source)
     rally_points = [_rally_point_json(writer, item, f"rally item {index}")
                     for index, item in enumerate(plan.rally)]
     document = {
         "fileType": "Plan",
         "geoFence": _fence_json(writer, plan.fence),
-        "groundStation": "mavconform",
+        "groundStation": GROUND_STATION,
         "mission": _mission_json(writer, plan),
         "rallyPoints": {"points": rally_points, "version": RALLY_VERSION},
         "version": FILE_VERSION,
@@ -299,37 +209,45 @@ def format_qgc_plan(plan: Plan, source: str) -> str:
     return json.dumps(document, indent=4, sort_keys=True, allow_nan=False) + "\n"
 
 
-def _mission_json(writer: _Writer, plan: Plan) -> dict:
-    mission: dict[str, Any] = {
-        **WRITTEN_MISSION_SETTINGS,
-        "items": [_simple_item_json(writer, item, index) for index, item in enumerate(plan.mission)],
+def _mission_json(writer: JsonWriter, plan: Plan) -> dict:
+    lat, lon, alt = plan.home if plan.home is not None else fallback_home(plan.mission)
+    if not math.isfinite(alt):
+        writer.fail("home", f"altitude {alt} is not finite")
+    settings = plan.settings
+    for name in ("cruise_speed", "hover_speed"):
+        value = getattr(settings, name)
+        if not (math.isfinite(value) and value >= 0):
+            writer.fail("settings", f"{name} {value} is not a finite number >= 0")
+    return {
+        "cruiseSpeed": settings.cruise_speed,
+        "firmwareType": writer.in_range(settings.firmware_type, 255, "firmware type", "settings"),
+        # as QGC has it after loading a plan from a vehicle: Mixed when there are items
+        # (each carries its own AltitudeMode), else its default, Relative
+        "globalPlanAltitudeMode": ALT_MODE_MIXED if plan.mission else ALT_MODE_RELATIVE,
+        "hoverSpeed": settings.hover_speed,
+        "items": items_json(writer, plan.mission),
+        "plannedHomePosition": [*writer.checked_lat_lon(lat, lon, "home"), alt],
+        "vehicleType": writer.in_range(settings.vehicle_type, 255, "vehicle type", "settings"),
         "version": MISSION_VERSION,
     }
-    if plan.home is not None:  # QGC requires it, but a plan without home omits it, not invents it
-        lat, lon, alt = plan.home
-        if not math.isfinite(alt):
-            writer.fail("home", f"altitude {alt} is not finite")
-        mission["plannedHomePosition"] = [*writer.checked_lat_lon(lat, lon, "home"), alt]
-    return mission
 
 
-def _simple_item_json(writer: _Writer, item: MissionItem, index: int) -> dict:
-    where = f"mission item {index}"
-    params = [writer.float32(p, where) for p in (item.param1, item.param2, item.param3, item.param4)]
-    for value in (item.x, item.y):  # the exact decimal's nearest double reads back to this int
-        params.append(float(xy_to_decimal(item.frame, value)) if xy_decimals(item.frame) else value)
-    params.append(writer.float32(item.z, where))
-    return {
-        "autoContinue": bool(writer.in_range(item.autocontinue, 1, "autocontinue", where)),
-        "command": writer.in_range(item.command, 65535, "command", where),
-        "doJumpId": index + 1,
-        "frame": writer.in_range(item.frame, 255, "frame", where),
-        "params": params,
-        "type": "SimpleItem",
-    }
+def fallback_home(mission: list[MissionItem]) -> Home:
+    """The planned home of a plan that has none, as QGC makes one up
+    (MissionController::_setPlannedHomePositionFromFirstCoordinate): 30 m north of the first
+    item with a location, at altitude 0; (0, 0, 0) when no item has one (QGC would write an
+    invalid coordinate there)."""
+    for item in mission:
+        if item.command in LOCATION_COMMANDS and item.frame in GLOBAL_FRAMES:
+            lat = float(xy_to_decimal(item.frame, item.x))
+            lon = float(xy_to_decimal(item.frame, item.y))
+            if -90 <= lat <= 90 and -180 <= lon <= 180:
+                north = lat + math.degrees(FALLBACK_HOME_OFFSET / _QT_EARTH_MEAN_RADIUS)
+                return round(min(north, 90.0), 7), lon, 0.0
+    return 0.0, 0.0, 0.0
 
 
-def _fence_json(writer: _Writer, items: list[MissionItem]) -> dict:
+def _fence_json(writer: JsonWriter, items: list[MissionItem]) -> dict:
     """Group fence items back into shapes: runs of vertices whose param1 is the run's length."""
     polygons: list[dict] = []
     circles: list[dict] = []
@@ -386,7 +304,7 @@ def _fence_json(writer: _Writer, items: list[MissionItem]) -> dict:
     return fence
 
 
-def _rally_point_json(writer: _Writer, item: MissionItem, where: str) -> list:
+def _rally_point_json(writer: JsonWriter, item: MissionItem, where: str) -> list:
     if item.command != Cmd.NAV_RALLY_POINT:
         writer.fail(where, f"command {item.command} is not MAV_CMD_NAV_RALLY_POINT (5100)")
     altitude = writer.finite_float32(item.z, where, "rally point altitude")

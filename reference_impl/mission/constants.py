@@ -1,10 +1,14 @@
 """Protocol numbers the engines speak in (MAV_MISSION_RESULT, MISSION_STATE, commands).
 
 Facts from the MAVLink definitions (our dialect carries the same values); kept here as
-IntEnums so engine code and reports read as words, not numbers.
+IntEnums so engine code and reports read as words, not numbers. `Cmd` names only the
+commands the engines act on; which commands a plan may hold comes from the upstream XML
+(commands.py).
 """
 
 from enum import IntEnum
+
+from .commands import DESTINATION_COMMANDS, PLAN_COMMANDS
 
 
 class MissionResult(IntEnum):
@@ -73,7 +77,7 @@ class Severity(IntEnum):
 
 
 class Cmd(IntEnum):
-    """The MAV_CMD values the reference implementation itself acts on or validates."""
+    """The MAV_CMD values the reference implementation itself acts on or validates by name."""
 
     NAV_WAYPOINT = 16
     NAV_LOITER_UNLIM = 17
@@ -113,16 +117,9 @@ FENCE_COMMANDS = frozenset({
     Cmd.NAV_FENCE_CIRCLE_EXCLUSION,
 })
 RALLY_COMMANDS = frozenset({Cmd.NAV_RALLY_POINT})
-# Flight-plan commands the reference vehicle understands (NAV, DO, CONDITION).
-MISSION_COMMANDS = frozenset({
-    Cmd.NAV_WAYPOINT, Cmd.NAV_LOITER_UNLIM, Cmd.NAV_LOITER_TURNS, Cmd.NAV_LOITER_TIME,
-    Cmd.NAV_RETURN_TO_LAUNCH, Cmd.NAV_LAND, Cmd.NAV_TAKEOFF, Cmd.NAV_LOITER_TO_ALT,
-    Cmd.NAV_DELAY, Cmd.CONDITION_DELAY, Cmd.CONDITION_DISTANCE, Cmd.CONDITION_YAW,
-    Cmd.DO_SET_MODE, Cmd.DO_JUMP, Cmd.DO_CHANGE_SPEED, Cmd.DO_SET_HOME, Cmd.DO_SET_SERVO,
-    Cmd.DO_LAND_START,
-})
-# Commands whose x/y/z are a position the vehicle flies to.
-POSITIONAL_COMMANDS = frozenset({
-    Cmd.NAV_WAYPOINT, Cmd.NAV_LOITER_UNLIM, Cmd.NAV_LOITER_TURNS, Cmd.NAV_LOITER_TIME,
-    Cmd.NAV_LAND, Cmd.NAV_TAKEOFF, Cmd.NAV_LOITER_TO_ALT,
-})
+# Mission commands the reference vehicle accepts: every command the upstream MAV_CMD enum
+# defines for a mission (commands.py, generated from the XML), not a hand list; a profile
+# narrows it (the `mission_commands` knob).
+MISSION_COMMANDS: frozenset[int] = PLAN_COMMANDS
+# Commands whose x/y/z are a position the vehicle flies to (XML hasLocation and isDestination).
+POSITIONAL_COMMANDS: frozenset[int] = DESTINATION_COMMANDS

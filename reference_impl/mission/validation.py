@@ -3,14 +3,16 @@
 The spec lets a vehicle refuse an item with a MISSION_ACK error that names the defect
 (MAV_MISSION_UNSUPPORTED, _UNSUPPORTED_FRAME, _INVALID_PARAMn, ...), which cancels the
 upload and leaves the old plan in place. The rules are data so a profile can swap them
-and a report can print them; the first rule an item breaks decides the code.
+and a report can print them; the first rule an item breaks decides the code. Which mission
+commands are known is a set a profile may narrow (`rules_for`); the spec vehicle's is every
+mission command of the upstream XML (commands.py).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import AbstractSet, Callable
 
 from .constants import (
     FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
@@ -22,6 +24,7 @@ COMMANDS_BY_TYPE = {
     MissionType.FENCE: FENCE_COMMANDS,
     MissionType.RALLY: RALLY_COMMANDS,
 }
+COMMAND_RULE = "command known for its mission type"
 _PARAM_CODES = {
     1: MissionResult.INVALID_PARAM1, 2: MissionResult.INVALID_PARAM2,
     3: MissionResult.INVALID_PARAM3, 4: MissionResult.INVALID_PARAM4,
@@ -54,9 +57,20 @@ def _positional(it: MissionItem) -> bool:
     return it.command in POSITIONAL_COMMANDS or it.mission_type != MissionType.MISSION
 
 
-SPEC_RULES: tuple[ItemRule, ...] = (
-    ItemRule("command known for its mission type", MissionResult.UNSUPPORTED,
-             lambda it: True, lambda it: it.command in COMMANDS_BY_TYPE[it.mission_type]),
+def command_rule(mission_commands: AbstractSet[int] | None) -> ItemRule:
+    """MAV_MISSION_UNSUPPORTED for a command the plan type does not hold. `mission_commands`:
+    the mission commands this vehicle stores; None: any command in a mission (fence and rally
+    items must still carry their own)."""
+    if mission_commands is None:
+        return ItemRule("fence and rally commands known", MissionResult.UNSUPPORTED,
+                        lambda it: it.mission_type is not MissionType.MISSION,
+                        lambda it: it.command in COMMANDS_BY_TYPE[it.mission_type])
+    known = {**COMMANDS_BY_TYPE, MissionType.MISSION: frozenset(mission_commands)}
+    return ItemRule(COMMAND_RULE, MissionResult.UNSUPPORTED,
+                    lambda it: True, lambda it: it.command in known[it.mission_type])
+
+
+_COMMON_RULES: tuple[ItemRule, ...] = (
     ItemRule("frame known", MissionResult.UNSUPPORTED_FRAME,
              lambda it: True, lambda it: it.frame in GLOBAL_FRAMES or it.frame == FRAME_MISSION),
     ItemRule("positions use a global frame", MissionResult.UNSUPPORTED_FRAME,
@@ -90,6 +104,15 @@ SPEC_RULES: tuple[ItemRule, ...] = (
              lambda it: it.command == Cmd.DO_JUMP,
              lambda it: math.isfinite(it.param2) and it.param2 >= -1),
 )
+
+
+def rules_for(mission_commands: AbstractSet[int] | None) -> tuple[ItemRule, ...]:
+    """The spec rules with another set of mission commands (None: any command, see
+    `command_rule`)."""
+    return (command_rule(mission_commands), *_COMMON_RULES)
+
+
+SPEC_RULES: tuple[ItemRule, ...] = rules_for(MISSION_COMMANDS)
 
 
 def first_defect(item: MissionItem, rules: tuple[ItemRule, ...] = SPEC_RULES) -> ItemRule | None:

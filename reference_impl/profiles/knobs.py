@@ -15,7 +15,8 @@ from typing import Any, Callable
 from ..mission.constants import MissionResult
 from ..mission.items import PLAN_TYPES, MissionType
 from ..mission.store import STORAGE_FORMS
-from ..mission.validation import SPEC_RULES
+from ..mission.commands import by_name
+from ..mission.validation import SPEC_RULES, rules_for
 
 BEHAVIOUR, TIMINGS, CONFIG = "behaviour", "timings", "config"
 _TYPE_BY_NAME = {t.label: t for t in PLAN_TYPES}
@@ -90,22 +91,33 @@ def _text(v: Any) -> str:
     return v
 
 
-_COMMAND_RULE = "command known for its mission type"
-
-
 def _unknown_commands(v: Any) -> tuple:
     """accept_unknown_commands = true: mission items with any command are accepted (fence
     and rally items must still carry their own commands)."""
-    if not _bool(v):
-        return SPEC_RULES
-    from ..mission.validation import ItemRule
-    rules = []
-    for rule in SPEC_RULES:
-        if rule.name == _COMMAND_RULE:
-            rule = ItemRule("fence and rally commands known", rule.code,
-                            lambda it: it.mission_type is not MissionType.MISSION, rule.holds)
-        rules.append(rule)
-    return tuple(rules)
+    return rules_for(None) if _bool(v) else SPEC_RULES
+
+
+def _command_value(v: Any) -> int:
+    """A MAV_CMD by its upstream name (with or without MAV_CMD_) or by number; a number need
+    not be in common.xml (an autopilot's own dialect has more, e.g. ardupilotmega.xml)."""
+    if isinstance(v, str):
+        facts = by_name(v)
+        if facts is None:
+            raise ValueError(f"{v!r} is no MAV_CMD of the upstream common.xml (give its number instead)")
+        return facts.value
+    return _count(0, 0xFFFF)(v)
+
+
+def _mission_commands(v: Any) -> tuple:
+    """mission_commands = [names or numbers]: the mission commands the vehicle stores; any
+    other in a mission upload gets MAV_MISSION_UNSUPPORTED."""
+    if not isinstance(v, list) or not v:
+        raise ValueError(f"expected a non-empty list of MAV_CMD names or numbers, got {v!r}")
+    values = [_command_value(x) for x in v]
+    if len(set(values)) != len(values):
+        twice = next(name for name, n in zip(v, values) if values.count(n) > 1)
+        raise ValueError(f"{twice!r} is listed twice")
+    return rules_for(frozenset(values))
 
 
 _KNOBS = (
@@ -122,6 +134,9 @@ _KNOBS = (
     Knob("request_int", BEHAVIOUR, "request_int", _bool, "request items with MISSION_REQUEST_INT (false: MISSION_REQUEST)"),
     Knob("accept_unknown_commands", BEHAVIOUR, "item_rules", _unknown_commands,
          "mission items with commands the vehicle does not know are accepted (skipped when flown)"),
+    Knob("mission_commands", BEHAVIOUR, "item_rules", _mission_commands,
+         "the mission commands stored (MAV_CMD names or numbers); others get UNSUPPORTED "
+         "(default: every mission command of the upstream common.xml)"),
     Knob("idle_reply", BEHAVIOUR, "idle_reply", _result_or_none, "MISSION_ACK for a stray item/request in idle (\"none\": silence)"),
     Knob("reack_last_item", BEHAVIOUR, "reack_last_item", _bool, "a late copy of the last item draws ACCEPTED again"),
     Knob("notify_upload_give_up", BEHAVIOUR, "notify_upload_give_up", _bool,

@@ -95,14 +95,27 @@ def _load(path: Path, depth: int) -> Profile:
         base_settings, documented = base.settings, list(base.documented)
         description = description or base.description
     settings = {s.knob: s for s in base_settings}
+    own: dict[tuple[str, str], str] = {}   # (where, field) -> the knob this file sets it with
     for i, entry in enumerate(_tables(data, "knob", path)):
         setting = _setting(entry, f"{path}: knob[{i}]", strict=bundled)
+        target = _target(setting.knob)
+        if own.setdefault(target, setting.knob) != setting.knob:
+            raise UsageError(f"{path}: knob[{i}] ({setting.knob}): sets what knob {own[target]!r} "
+                             "sets too; keep one of them")
+        for other in [k for k in settings if k != setting.knob and _target(k) == target]:
+            del settings[other]            # e.g. mission_commands replaces a base's accept_unknown_commands
         settings[setting.knob] = setting   # a later setting replaces the base's
     for i, entry in enumerate(_tables(data, "documented", path)):
         documented.append(_documented(entry, f"{path}: documented[{i}]"))
     ordered = tuple(settings.values())
     behaviour, config = _build(ordered, path)
     return Profile(name, description, behaviour, config, ordered, tuple(documented), str(path))
+
+
+def _target(knob: str) -> tuple[str, str]:
+    """Where a knob lands: two knobs may set the same engine field (accept_unknown_commands
+    and mission_commands both set the item rules), and only one of them can be in force."""
+    return KNOBS[knob].where, KNOBS[knob].field
 
 
 def _string(data: dict, key: str, path: Path, *, required: bool = False) -> str:

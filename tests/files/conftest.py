@@ -8,6 +8,7 @@ import pytest
 from hypothesis import strategies as st
 
 from mavconform.reference_impl.files import Plan, plan_from_items
+from mavconform.reference_impl.files.plan import MissionSettings
 from mavconform.reference_impl.mission.constants import Cmd
 from mavconform.reference_impl.mission.items import INT32_MAX, INT32_MIN, MissionItem
 
@@ -62,11 +63,23 @@ homes = st.one_of(st.none(), st.tuples(
     st.floats(-90, 90), st.floats(-180, 180), st.floats(allow_nan=False, allow_infinity=False)))
 
 
+settings = st.builds(
+    MissionSettings, st.integers(0, 255), st.integers(0, 255),
+    st.floats(0, 100, allow_nan=False), st.floats(0, 100, allow_nan=False))
+
+
 @st.composite
 def qgc_plans(draw) -> Plan:
-    """Plans a .plan file holds exactly (no `current` flags, no infinite params)."""
-    mission = draw(st.lists(mission_items(json_float32s, st.just(0)), max_size=6))
-    return plan_from_items(mission, draw(fence_items()), draw(rally_items), draw(homes))
+    """Plans a .plan file holds exactly (no `current` flags, no infinite params; a DO_JUMP's
+    target is an item of the mission, as a .plan names it by that item's doJumpId)."""
+    mission = draw(st.lists(mission_items(json_float32s, st.just(0)).filter(
+        lambda item: item.command != Cmd.DO_JUMP), max_size=6))
+    if mission and draw(st.booleans()):
+        where = draw(st.integers(0, len(mission)))
+        target = draw(st.integers(0, len(mission)))   # the list grows by the jump itself
+        mission.insert(where, MissionItem(seq=0, frame=2, command=Cmd.DO_JUMP, param1=float(target),
+                                          param2=float(draw(st.integers(-1, 10)))))
+    return plan_from_items(mission, draw(fence_items()), draw(rally_items), draw(homes), draw(settings))
 
 
 @st.composite

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from mavconform.reference_impl.mission import messages as m
+from mavconform.reference_impl.mission.commands import by_name
 from mavconform.reference_impl.mission.constants import MissionResult as R
 from mavconform.reference_impl.mission.items import MissionType as T
 from mavconform.reference_impl.mission.server import MissionServer
@@ -24,6 +25,11 @@ def server(profile: str, **knobs) -> Script:
     if knobs:
         behaviour = replace(behaviour, **knobs)
     return Script(MissionServer(*VEHICLE, behaviour, record_history=True))
+
+
+def cmd(name: str) -> int:
+    """A MAV_CMD value from the upstream XML facts (our dialect carries only a few)."""
+    return by_name(name).value
 
 
 def item(it, as_int=True):
@@ -191,15 +197,30 @@ def test_downloads_hold_no_state():                               # A14
     assert s.engine.is_idle() and s.feed(ack(R.ACCEPTED)) == []
 
 
-def test_unknown_mission_commands_are_accepted_and_compact_storage_rounds():   # A17, A13
+def test_commands_of_other_vehicle_types_are_accepted_and_compact_storage_rounds():   # A17, A13
+    """AP_Mission stores a plane's or a VTOL's commands on any vehicle (A17); a command it has
+    no storage form for is refused (AP_Mission::mavlink_int_to_mission_cmd's default)."""
     s = server("ardupilot")
-    odd = [waypoint(0, command=31999), waypoint(1, param1=2.6, param4=45.0, z=12.345)]
+    odd = [waypoint(0, command=cmd("NAV_VTOL_TAKEOFF")), waypoint(1, param1=2.6, param4=45.0, z=12.345)]
     assert acks(upload(s, odd)) == [(R.ACCEPTED, T.MISSION)]
     kept = s.engine.store.items(T.MISSION)[1]
     assert (kept.param1, kept.param4) == (2.0, 0.0) and abs(kept.z - 12.34) < 1e-5
-    spec = server("spec")
-    spec.feed(count(1))
-    assert acks(spec.feed(item(odd[0]))) == [(R.UNSUPPORTED, T.MISSION)]
+    for name in ("ardupilot", "spec"):
+        other = server(name)
+        other.feed(count(1))
+        assert acks(other.feed(item(waypoint(0, command=31999)))) == [(R.UNSUPPORTED, T.MISSION)], name
+
+
+def test_px4_stores_only_the_commands_its_parser_knows():          # P19
+    """ROI, camera and gimbal items go in (issue 13); DO_SET_SERVO is not in PX4's list."""
+    accepted = [waypoint(0, command=cmd("DO_SET_ROI_LOCATION")),
+                waypoint(1, frame=2, command=cmd("IMAGE_START_CAPTURE")),
+                waypoint(2, frame=2, command=cmd("DO_GIMBAL_MANAGER_PITCHYAW")),
+                waypoint(3, frame=2, command=cmd("DO_SET_CAM_TRIGG_DIST"))]
+    assert acks(upload(server("px4"), accepted)) == [(R.ACCEPTED, T.MISSION)]
+    s = server("px4")
+    s.feed(count(1))
+    assert acks(s.feed(item(waypoint(0, frame=2, command=d.MAV_CMD_DO_SET_SERVO)))) == [(R.UNSUPPORTED, T.MISSION)]
 
 
 # --- PX4-like ------------------------------------------------------------------------------
