@@ -63,16 +63,23 @@ class SearchInterrupted(KeyboardInterrupt):
 INTERRUPT_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
-def caused_by_interrupt(exc: BaseException | None) -> bool:
-    """A KeyboardInterrupt, or what code that was handling one raised instead: Hypothesis,
-    interrupted before its engine was set up, fails an assertion of its own about it."""
+def raised_while_handling(exc: BaseException | None, kind: type[BaseException]) -> bool:
+    """`exc` is a `kind`, or what code handling one raised instead (its `__context__` chain,
+    a few links deep): Hypothesis turns an exception it did not expect mid-test into one
+    of its own."""
     for _ in range(8):
         if exc is None:
             return False
-        if isinstance(exc, KeyboardInterrupt):
+        if isinstance(exc, kind):
             return True
         exc = exc.__context__
     return False
+
+
+def caused_by_interrupt(exc: BaseException | None) -> bool:
+    """A KeyboardInterrupt, or what Hypothesis made of one: interrupted before its engine
+    was set up, it fails an assertion of its own about it."""
+    return raised_while_handling(exc, KeyboardInterrupt)
 
 
 class InterruptWatch:

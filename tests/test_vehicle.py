@@ -5,13 +5,12 @@ from __future__ import annotations
 import pytest
 
 from mavconform.reference_impl.flight import haversine_m
-from mavconform.reference_impl.gcs import GcsNode
 from mavconform.reference_impl.mission.constants import Cmd, CommandResult, MissionState
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
-from mavconform.reference_impl.net import SimNetwork
-from mavconform.reference_impl.session import GcsSession
-from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.reference_impl.vehicle import VehicleConfig
 from mavconform.reference_impl.wire.dialect import mavlink as d
+
+from .rigs import vehicle_and_gcs
 
 HOME = (47.397742, 8.545594)
 
@@ -22,15 +21,8 @@ def wp(seq, north_m, alt=20.0, command=Cmd.NAV_WAYPOINT, **kw):
 
 
 def rig(config=None):
-    net = SimNetwork(seed=1)
-    vehicle = VehicleNode(config, wall_clock=net.clock.wall)
-    gcs = GcsNode(remote="vehicle", wall_clock=net.clock.wall)
-    net.add_node("vehicle", vehicle)
-    net.add_node("gcs", gcs)
-    net.connect("gcs", "vehicle")
-    session = GcsSession(net, gcs)
-    session.wait_for_target(5)
-    return net, vehicle, gcs, session
+    r = vehicle_and_gcs(config, seed=1)
+    return r.net, r.vehicle, r.gcs, r.session
 
 
 def start_mission(net, gcs):

@@ -36,7 +36,7 @@ from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
 from ..case import Case, Violation
-from ..outcomes import SearchInterrupted, ToolError, caused_by_interrupt
+from ..outcomes import SearchInterrupted, ToolError, caused_by_interrupt, raised_while_handling
 from .connection import TargetConnection
 from .machine import CampaignOver, CampaignState, Finding, Knobs, machine_class
 from .steps import Runner
@@ -206,13 +206,7 @@ def _ended_by_us(exc: BaseException | None) -> bool:
     """`CampaignOver`, or what Hypothesis made of it: ending a test case half-way can make
     it report a `FlakyStrategyDefinition` (the same choices drew more before), with ours as
     its context."""
-    for _ in range(8):
-        if exc is None:
-            return False
-        if isinstance(exc, CampaignOver):
-            return True
-        exc = exc.__context__
-    return False
+    return raised_while_handling(exc, CampaignOver)
 
 
 def _split(exc: BaseException) -> tuple[list[Finding], list[BaseException]]:

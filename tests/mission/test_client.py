@@ -733,20 +733,9 @@ def test_a_generic_nack_after_the_last_item_waits_for_a_late_accept_when_adapted
 # taken as the answer to MISSION_CLEAR_ALL when it can be told apart.
 
 def _clear_session(up, down):
-    from mavconform.reference_impl.gcs import GcsNode
-    from mavconform.reference_impl.net import SimNetwork
-    from mavconform.reference_impl.session import GcsSession
-    from mavconform.reference_impl.vehicle import VehicleNode
-
-    net = SimNetwork(seed=0)
-    vehicle = VehicleNode(wall_clock=net.clock.wall)
-    gcs = GcsNode(remote="vehicle", wall_clock=net.clock.wall)
-    net.add_node("vehicle", vehicle)
-    net.add_node("gcs", gcs)
-    net.connect("gcs", "vehicle", a_to_b=up, b_to_a=down)
-    session = GcsSession(net, gcs)
-    session.wait_for_target(10)
-    return net, vehicle, session
+    from ..rigs import vehicle_and_gcs
+    r = vehicle_and_gcs(seed=0, up=up, down=down, discovery=10)
+    return r.net, r.vehicle, r.session
 
 
 def test_a_late_upload_accept_does_not_answer_a_lost_clear():

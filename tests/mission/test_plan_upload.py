@@ -10,16 +10,14 @@ import pytest
 
 from mavconform import gcs_cmd
 from mavconform.reference_impl.files import load_plan, plan_from_items, save_plan
-from mavconform.reference_impl.gcs import GcsNode
 from mavconform.reference_impl.mission.behaviour import ServerBehaviour
 from mavconform.reference_impl.mission.constants import MissionResult as R
 from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType
 from mavconform.reference_impl.mission.plan_upload import previous_plans, upload_plan
 from mavconform.reference_impl.mission.results import Outcome
-from mavconform.reference_impl.net import SimNetwork
-from mavconform.reference_impl.session import GcsSession
-from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
+from mavconform.reference_impl.vehicle import VehicleConfig
 
+from ..rigs import vehicle_and_gcs
 from .conftest import plan
 
 M, F, RA = MissionType.MISSION, MissionType.FENCE, MissionType.RALLY
@@ -28,15 +26,8 @@ NO_MISSIONS = ServerBehaviour(supported_types=frozenset({F, RA}))   # mission up
 
 
 def rig(behaviour: ServerBehaviour = ServerBehaviour()):
-    net = SimNetwork(seed=5)
-    vehicle = VehicleNode(VehicleConfig(behaviour=behaviour), wall_clock=net.clock.wall)
-    gcs = GcsNode(remote="vehicle", wall_clock=net.clock.wall)
-    net.add_node("vehicle", vehicle)
-    net.add_node("gcs", gcs)
-    net.connect("gcs", "vehicle")
-    session = GcsSession(net, gcs)
-    session.wait_for_target(5)
-    return net, vehicle, session
+    r = vehicle_and_gcs(VehicleConfig(behaviour=behaviour), seed=5)
+    return r.net, r.vehicle, r.session
 
 
 def test_a_refused_mission_leaves_fence_and_rally_unsent() -> None:

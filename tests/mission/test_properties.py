@@ -16,13 +16,11 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from mavconform.reference_impl.gcs import GcsNode
 from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType as T, renumber
 from mavconform.reference_impl.mission.transitions import SlotState
-from mavconform.reference_impl.net import FaultModel, SimNetwork
-from mavconform.reference_impl.session import GcsSession
-from mavconform.reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.net import FaultModel
 
+from ..rigs import vehicle_and_gcs
 from ..strategies import fault_models, plan_items
 
 LIMIT = 5
@@ -62,15 +60,8 @@ def run_operation(net, gcs, session, op):
 
 
 def build(seed: int, up: FaultModel, down: FaultModel):
-    net = SimNetwork(seed=seed)
-    vehicle = VehicleNode(wall_clock=net.clock.wall)
-    gcs = GcsNode(remote="vehicle", wall_clock=net.clock.wall)
-    net.add_node("vehicle", vehicle)
-    net.add_node("gcs", gcs)
-    net.connect("gcs", "vehicle", a_to_b=up, b_to_a=down)
-    session = GcsSession(net, gcs)
-    session.wait_for_target(timeout=60)
-    return net, vehicle, gcs, session
+    r = vehicle_and_gcs(seed=seed, up=up, down=down, discovery=60)
+    return r.net, r.vehicle, r.gcs, r.session
 
 
 @given(seed=st.integers(0, 2**32 - 1), up=fault_models(), down=fault_models(), ops=operations())

@@ -2,26 +2,17 @@
 
 from __future__ import annotations
 
-from mavconform.reference_impl.gcs import GcsNode
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.mission.results import Outcome
-from mavconform.reference_impl.net import DropMessage, FaultModel, SimNetwork
-from mavconform.reference_impl.session import GcsSession
-from mavconform.reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.net import DropMessage, FaultModel
 
+from ..rigs import vehicle_and_gcs
 from .conftest import plan
 
 
 def rig(up=(), down=()):
-    net = SimNetwork(seed=5)
-    vehicle = VehicleNode(wall_clock=net.clock.wall)
-    gcs = GcsNode(remote="vehicle", wall_clock=net.clock.wall)
-    net.add_node("vehicle", vehicle)
-    net.add_node("gcs", gcs)
-    net.connect("gcs", "vehicle", a_to_b=FaultModel(rules=tuple(up)), b_to_a=FaultModel(rules=tuple(down)))
-    session = GcsSession(net, gcs)
-    session.wait_for_target(5)
-    return net, vehicle, session
+    r = vehicle_and_gcs(seed=5, up=FaultModel(rules=tuple(up)), down=FaultModel(rules=tuple(down)))
+    return r.net, r.vehicle, r.session
 
 
 def test_dropped_second_request_is_retried_after_the_item_timeout():

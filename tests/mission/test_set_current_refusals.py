@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import pytest
 
-from mavconform.reference_impl.gcs import GcsNode
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.adaptations import ARDUPILOT, NONE, PX4
 from mavconform.reference_impl.mission.client import MissionClient
@@ -13,11 +12,11 @@ from mavconform.reference_impl.mission.constants import CommandResult
 from mavconform.reference_impl.mission.constants import MissionResult as R
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.mission.results import Outcome
-from mavconform.reference_impl.net import SimNetwork
 from mavconform.reference_impl.profiles import load_profile
 from mavconform.reference_impl.session import GcsSession
 from mavconform.reference_impl.wire.dialect import mavlink as d
 
+from ..rigs import vehicle_and_gcs
 from .conftest import plan
 from .script import GCS, VEHICLE, Script, names
 
@@ -105,13 +104,7 @@ def test_in_progress_is_not_a_refusal() -> None:
 
 # --- against the reference vehicle's PX4 and ArduPilot profiles -------------------------------
 def _rig(profile: str) -> GcsSession:
-    net = SimNetwork(seed=3)
-    gcs = GcsNode(remote="vehicle", wall_clock=net.clock.wall)
-    net.add_node("vehicle", load_profile(profile).vehicle())
-    net.add_node("gcs", gcs)
-    net.connect("gcs", "vehicle")
-    session = GcsSession(net, gcs)
-    session.wait_for_target(5)
+    session = vehicle_and_gcs(load_profile(profile).config, seed=3).session
     assert session.upload(MissionType.MISSION, plan(3)).ok
     return session
 

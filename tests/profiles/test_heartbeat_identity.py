@@ -3,15 +3,17 @@ autopilot's own numbering, so a GCS shows a real mode instead of "unknown" (virt
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from mavconform.reference_impl.gcs import GcsNode
 from mavconform.reference_impl.mission.constants import Cmd
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
-from mavconform.reference_impl.net import SimNetwork
 from mavconform.reference_impl.profiles import load_profile
-from mavconform.reference_impl.session import GcsSession
 from mavconform.reference_impl.wire.dialect import mavlink as d
+
+from ..rigs import vehicle_and_gcs
 
 
 def px4_mode(main: int, sub: int) -> int:
@@ -37,14 +39,8 @@ def _beats(gcs: GcsNode) -> list:
 @pytest.mark.parametrize("name", sorted(EXPECTED))
 def test_heartbeat_carries_the_profiles_autopilot_and_mode(name: str) -> None:
     autopilot, idle, flying = EXPECTED[name]
-    net = SimNetwork(seed=1)
-    vehicle = load_profile(name).vehicle(autostart=True)
-    gcs = GcsNode(remote="vehicle", wall_clock=net.clock.wall)
-    net.add_node("vehicle", vehicle)
-    net.add_node("gcs", gcs)
-    net.connect("gcs", "vehicle")
-    session = GcsSession(net, gcs)
-    session.wait_for_target(5)
+    rig = vehicle_and_gcs(dataclasses.replace(load_profile(name).config, autostart=True), seed=1)
+    net, gcs, session = rig.net, rig.gcs, rig.session
     net.run_for(2.0)
     beat = _beats(gcs)[-1]
     assert (beat.autopilot, beat.custom_mode) == (autopilot, idle)
