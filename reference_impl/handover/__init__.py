@@ -1,0 +1,1 @@
+"""Authority handover between ground stations: operator control, coverage regions, the mission computer."""
