@@ -85,6 +85,9 @@ def run(args: argparse.Namespace) -> int:
     target = parse_udp_uri(args.target, option="--target")
     # bad files and paths fail before any network I/O
     plan = load_plan(args.file) if args.operation == "upload" else None
+    for note in plan.notes if plan is not None else ():
+        # e.g. a skipped version-1 fence: uploading the plan clears the vehicle's fence
+        print(f"mavconform: warning: {note}", file=sys.stderr)
     if args.operation == "download":
         check_writable(args.file)
     with _session(args, target) as session:

@@ -15,9 +15,12 @@ client records an adaptation as used only when it changed what the GCS did, and 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
+from typing import Sequence
 
 from ..wire.dialect import mavlink as _d
+from .constants import Cmd
 from .items import GLOBAL_FRAMES, MissionItem, MissionType
 
 
@@ -31,8 +34,11 @@ class Adaptation:
 HOME_AT_SEQ0 = Adaptation(
     "home-at-seq0",
     "mission seq 0 is the vehicle's home: uploads send a home placeholder at seq 0 and count+1, "
-    "downloads drop item 0, set-current and MISSION_CURRENT are offset by one",
-    "VARIANTS A1; QGroundControl and MAVSDK send count+1 to ArduPilot")
+    "downloads drop item 0, a DO_JUMP's target (param1) goes up by one on upload and down by one "
+    "on download, set-current and MISSION_CURRENT are offset by one",
+    "VARIANTS A1; QGroundControl and MAVSDK send count+1 to ArduPilot; QGroundControl "
+    "src/MissionManager/PlanManager.cc writeMissionItems / _handleMissionItem shift DO_JUMP param1 "
+    "by one between its home-at-0 numbering and a vehicle without a home item")
 ITEM_INT_FOR_REQUEST = Adaptation(
     "item-int-for-request",
     "a MISSION_REQUEST (float) is answered with MISSION_ITEM_INT, as if it were MISSION_REQUEST_INT",
@@ -168,3 +174,12 @@ def home_placeholder(items: list[MissionItem]) -> MissionItem:
     anchor = next((i for i in items if i.frame in GLOBAL_FRAMES), None)
     x, y = (anchor.x, anchor.y) if anchor is not None else (0, 0)
     return MissionItem(0, 0, 16, x=x, y=y, z=0.0, mission_type=MissionType.MISSION)
+
+
+def shift_jumps(items: Sequence[MissionItem], by: int) -> list[MissionItem]:
+    """The items with every DO_JUMP target (param1, a seq) moved by `by`: a plan names the
+    target by its position without a home item, a home-at-seq-0 vehicle by its seq (one more).
+    QGroundControl numbers from its home (0) and shifts the other way for PX4: -1 on write,
+    +1 on read (PlanManager.cc writeMissionItems, _handleMissionItem)."""
+    return [replace(it, param1=it.param1 + by)
+            if it.command == Cmd.DO_JUMP and math.isfinite(it.param1) else it for it in items]

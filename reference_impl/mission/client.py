@@ -33,7 +33,7 @@ from .adaptations import (CLEAR_TYPES_SEPARATELY, FINISH_RESTARTED_UPLOAD, HOME_
                           IGNORE_NONTERMINATING_NACK, ITEM_INT_FOR_REQUEST, LONG_VEHICLE_TIMEOUT,
                           AWAIT_ACCEPT_AFTER_NACK, NON_ATOMIC_UPLOAD, NONE,
                           RESTART_DOWNLOAD_ON_ERROR, RETRY_REFUSED_SET_CURRENT, Adaptations,
-                          home_placeholder)
+                          home_placeholder, shift_jumps)
 from .constants import Cmd, CommandResult, MissionResult, Severity
 from .items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType, renumber
 from .results import Operation, OperationResult, Outcome
@@ -142,9 +142,10 @@ class MissionClient:
         op.items = renumber(items, mission_type)
         op.last_progress = now
         if op.items and self.adaptations.home_offset(op.mission_type):
-            # Seed 000 / A1: the vehicle's seq 0 is home, so the plan goes out from seq 1.
+            # Seed 000 / A1: the vehicle's seq 0 is home, so the plan goes out from seq 1
+            # (and a DO_JUMP's target with it).
             op.home = 1
-            op.items = renumber([home_placeholder(op.items), *op.items], mission_type)
+            op.items = renumber([home_placeholder(op.items), *shift_jumps(op.items, 1)], mission_type)
             op.use(HOME_AT_SEQ0.id)
         op.count = len(op.items)
         # An empty upload is applied by its MISSION_COUNT alone (count 0 = clear), so from
@@ -361,7 +362,8 @@ class MissionClient:
         if op.expected < op.count:
             return self._request_expected(op, now)
         ack = self._to_target(m.ack_message(MissionResult.ACCEPTED, op.mission_type, self.target))
-        items = renumber(op.items[op.home:] if op.home else op.items)   # drop the vehicle's home
+        # drop the vehicle's home, and count DO_JUMP targets without it
+        items = renumber(shift_jumps(op.items[op.home:], -op.home) if op.home else op.items)
         # `current` is the vehicle's progress marker (seed 000 field table), not the plan's:
         # the plan comes back without it, and which item was current is said beside it
         current = next((it.seq for it in items if it.current), None)

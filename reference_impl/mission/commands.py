@@ -4,7 +4,8 @@ derived from it.
 The vehicle's accepted mission commands used to be a hand list of 18; QGroundControl
 missions carry ROI, camera and gimbal items too, and a vehicle that refuses them is no use
 to a GCS test. So the spec vehicle takes every command the upstream definitions have (a
-profile narrows that with the `mission_commands` knob, from its autopilot's source), and
+profile narrows that with the `mission_commands` knob, from its autopilot's source, per frame
+where the autopilot has one list for global frames and another for MAV_FRAME_MISSION), and
 "has a position" comes from the XML's `hasLocation` / `isDestination` attributes.
 """
 

@@ -4,16 +4,19 @@ The spec lets a vehicle refuse an item with a MISSION_ACK error that names the d
 (MAV_MISSION_UNSUPPORTED, _UNSUPPORTED_FRAME, _INVALID_PARAMn, ...), which cancels the
 upload and leaves the old plan in place. The rules are data so a profile can swap them
 and a report can print them; the first rule an item breaks decides the code. Which mission
-commands are known is a set a profile may narrow (`rules_for`); the spec vehicle's is every
-mission command of the upstream XML (commands.py).
+commands are known is a set a profile may narrow, or a table of sets chosen by the item's
+frame (`CommandList`, as PX4's parser has), and the frames an item with a location may use
+are a set a profile may widen (`rules_for`); the spec vehicle knows every mission command of
+the upstream XML (commands.py) in any global frame or MAV_FRAME_MISSION.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import AbstractSet, Callable
+from typing import AbstractSet, Callable, Sequence
 
+from .commands import LOCATION_COMMANDS
 from .constants import (
     FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
 )
@@ -25,6 +28,8 @@ COMMANDS_BY_TYPE = {
     MissionType.RALLY: RALLY_COMMANDS,
 }
 COMMAND_RULE = "command known for its mission type"
+FRAME_LIST_RULE = "frame selects a command list"
+LOCATION_FRAME_RULE = "a location in a frame the vehicle takes"
 _PARAM_CODES = {
     1: MissionResult.INVALID_PARAM1, 2: MissionResult.INVALID_PARAM2,
     3: MissionResult.INVALID_PARAM3, 4: MissionResult.INVALID_PARAM4,
@@ -57,24 +62,77 @@ def _positional(it: MissionItem) -> bool:
     return it.command in POSITIONAL_COMMANDS or it.mission_type != MissionType.MISSION
 
 
-def command_rule(mission_commands: AbstractSet[int] | None) -> ItemRule:
+def _in_mission(it: MissionItem) -> bool:
+    return it.mission_type is MissionType.MISSION
+
+
+@dataclass(frozen=True)
+class CommandList:
+    """The mission commands a vehicle stores for items in `frames` (None: in any frame)."""
+
+    frames: frozenset[int] | None
+    commands: frozenset[int]
+
+
+MissionCommands = AbstractSet[int] | Sequence[CommandList] | None
+
+
+def command_rules(mission_commands: MissionCommands) -> tuple[ItemRule, ...]:
     """MAV_MISSION_UNSUPPORTED for a command the plan type does not hold. `mission_commands`:
-    the mission commands this vehicle stores; None: any command in a mission (fence and rally
-    items must still carry their own)."""
+    the mission commands this vehicle stores, in any frame; or a table of `CommandList`s,
+    where the first list whose frames hold the item's frame decides, and a mission item in a
+    frame no list has gets UNSUPPORTED_FRAME first; None: any command in a mission (fence and
+    rally items must still carry their own)."""
     if mission_commands is None:
-        return ItemRule("fence and rally commands known", MissionResult.UNSUPPORTED,
-                        lambda it: it.mission_type is not MissionType.MISSION,
-                        lambda it: it.command in COMMANDS_BY_TYPE[it.mission_type])
-    known = {**COMMANDS_BY_TYPE, MissionType.MISSION: frozenset(mission_commands)}
-    return ItemRule(COMMAND_RULE, MissionResult.UNSUPPORTED,
-                    lambda it: True, lambda it: it.command in known[it.mission_type])
+        return (ItemRule("fence and rally commands known", MissionResult.UNSUPPORTED,
+                         lambda it: it.mission_type is not MissionType.MISSION,
+                         lambda it: it.command in COMMANDS_BY_TYPE[it.mission_type]),)
+    if isinstance(mission_commands, AbstractSet):
+        mission_commands = (CommandList(None, frozenset(mission_commands)),)
+    table = tuple(mission_commands)
+
+    def selected(frame: int) -> CommandList | None:
+        return next((c for c in table if c.frames is None or frame in c.frames), None)
+
+    def known(it: MissionItem) -> bool:
+        if it.mission_type is not MissionType.MISSION:
+            return it.command in COMMANDS_BY_TYPE[it.mission_type]
+        chosen = selected(it.frame)
+        return chosen is not None and it.command in chosen.commands
+
+    command = ItemRule(COMMAND_RULE, MissionResult.UNSUPPORTED, lambda it: True, known)
+    if all(c.frames is None for c in table):
+        return (command,)
+    return (ItemRule(FRAME_LIST_RULE, MissionResult.UNSUPPORTED_FRAME, _in_mission,
+                     lambda it: selected(it.frame) is not None), command)
 
 
-_COMMON_RULES: tuple[ItemRule, ...] = (
-    ItemRule("frame known", MissionResult.UNSUPPORTED_FRAME,
-             lambda it: True, lambda it: it.frame in GLOBAL_FRAMES or it.frame == FRAME_MISSION),
-    ItemRule("positions use a global frame", MissionResult.UNSUPPORTED_FRAME,
-             _positional, lambda it: it.frame in GLOBAL_FRAMES),
+_FRAME_KNOWN = ItemRule("frame known", MissionResult.UNSUPPORTED_FRAME,
+                        lambda it: True, lambda it: it.frame in GLOBAL_FRAMES or it.frame == FRAME_MISSION)
+_POSITIONS_GLOBAL = ItemRule("positions use a global frame", MissionResult.UNSUPPORTED_FRAME,
+                             _positional, lambda it: it.frame in GLOBAL_FRAMES)
+
+
+def frame_rules(location_frames: AbstractSet[int] | None) -> tuple[ItemRule, ...]:
+    """UNSUPPORTED_FRAME rules. None: the spec's (any item in a global frame or
+    MAV_FRAME_MISSION, a destination in a global frame). A set: a mission item whose command
+    has a location (the XML's hasLocation) must use one of these frames, and the frame of one
+    without a location is not looked at; fence and rally items keep the spec's rules."""
+    if location_frames is None:
+        return (_FRAME_KNOWN, _POSITIONS_GLOBAL)
+    frames = frozenset(location_frames)
+    return (
+        ItemRule(_FRAME_KNOWN.name, _FRAME_KNOWN.code,
+                 lambda it: not _in_mission(it), _FRAME_KNOWN.holds),
+        ItemRule(_POSITIONS_GLOBAL.name, _POSITIONS_GLOBAL.code,
+                 lambda it: not _in_mission(it), _POSITIONS_GLOBAL.holds),
+        ItemRule(LOCATION_FRAME_RULE, MissionResult.UNSUPPORTED_FRAME,
+                 lambda it: _in_mission(it) and it.command in LOCATION_COMMANDS,
+                 lambda it: it.frame in frames),
+    )
+
+
+_VALUE_RULES: tuple[ItemRule, ...] = (
     ItemRule("current and autocontinue are 0 or 1", MissionResult.INVALID,
              lambda it: True, lambda it: it.current in (0, 1) and it.autocontinue in (0, 1)),
     *(ItemRule(f"param{n} is not infinite", _PARAM_CODES[n],
@@ -106,10 +164,11 @@ _COMMON_RULES: tuple[ItemRule, ...] = (
 )
 
 
-def rules_for(mission_commands: AbstractSet[int] | None) -> tuple[ItemRule, ...]:
-    """The spec rules with another set of mission commands (None: any command, see
-    `command_rule`)."""
-    return (command_rule(mission_commands), *_COMMON_RULES)
+def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
+              location_frames: AbstractSet[int] | None = None) -> tuple[ItemRule, ...]:
+    """The spec rules with another set (or frame table) of mission commands (None: any
+    command, see `command_rules`) and other frames for items with a location (`frame_rules`)."""
+    return (*command_rules(mission_commands), *frame_rules(location_frames), *_VALUE_RULES)
 
 
 SPEC_RULES: tuple[ItemRule, ...] = rules_for(MISSION_COMMANDS)

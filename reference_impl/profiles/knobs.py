@@ -1,9 +1,11 @@
 """Every knob a profile file may set: its name, where it lands, how its value is read.
 
-A knob lands in `ServerBehaviour` (the mission engine), in its `Timings`, or in
-`VehicleConfig` (the node around it). Values come from TOML; each parser turns one into the
-engine's type or raises `ValueError` with what was expected, which the loader turns into a
-one-line `UsageError` naming the file and the key.
+A knob lands in `ServerBehaviour` (the mission engine), in its `Timings`, in
+`VehicleConfig` (the node around it), or in the item rules (RULES: each such knob is one
+argument of `validation.rules_for`, which builds `ServerBehaviour.item_rules` from them
+all). Values come from TOML; each parser turns one into the engine's type or raises
+`ValueError` with what was expected, which the loader turns into a one-line `UsageError`
+naming the file and the key.
 """
 
 from __future__ import annotations
@@ -12,14 +14,17 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from ..mission.constants import MissionResult
+from ..mission.commands import by_name
+from ..mission.constants import MISSION_COMMANDS, MissionResult
 from ..mission.items import PLAN_TYPES, MissionType
 from ..mission.store import STORAGE_FORMS
-from ..mission.commands import by_name
-from ..mission.validation import SPEC_RULES, rules_for
+from ..mission.validation import CommandList
+from ..wire.dialect import mavlink as _d
 
-BEHAVIOUR, TIMINGS, CONFIG = "behaviour", "timings", "config"
+BEHAVIOUR, TIMINGS, CONFIG, RULES = "behaviour", "timings", "config", "rules"
 _TYPE_BY_NAME = {t.label: t for t in PLAN_TYPES}
+_FRAME_BY_NAME = {e.name.removeprefix("MAV_FRAME_"): value for value, e in _d.enums["MAV_FRAME"].items()
+                  if not e.name.endswith("_ENUM_END")}
 
 
 @dataclass(frozen=True)
@@ -91,10 +96,10 @@ def _text(v: Any) -> str:
     return v
 
 
-def _unknown_commands(v: Any) -> tuple:
+def _unknown_commands(v: Any) -> frozenset[int] | None:
     """accept_unknown_commands = true: mission items with any command are accepted (fence
     and rally items must still carry their own commands)."""
-    return rules_for(None) if _bool(v) else SPEC_RULES
+    return None if _bool(v) else MISSION_COMMANDS
 
 
 def _command_value(v: Any) -> int:
@@ -108,16 +113,52 @@ def _command_value(v: Any) -> int:
     return _count(0, 0xFFFF)(v)
 
 
-def _mission_commands(v: Any) -> tuple:
-    """mission_commands = [names or numbers]: the mission commands the vehicle stores; any
-    other in a mission upload gets MAV_MISSION_UNSUPPORTED."""
+def _values(v: Any, what: str, parse: Callable[[Any], int]) -> list[int]:
     if not isinstance(v, list) or not v:
-        raise ValueError(f"expected a non-empty list of MAV_CMD names or numbers, got {v!r}")
-    values = [_command_value(x) for x in v]
+        raise ValueError(f"expected a non-empty list of {what}, got {v!r}")
+    values = [parse(x) for x in v]
     if len(set(values)) != len(values):
-        twice = next(name for name, n in zip(v, values) if values.count(n) > 1)
+        twice = next(x for x, n in zip(v, values) if values.count(n) > 1)
         raise ValueError(f"{twice!r} is listed twice")
-    return rules_for(frozenset(values))
+    return values
+
+
+def _frame_value(v: Any) -> int:
+    """A MAV_FRAME by name (with or without MAV_FRAME_) or by number."""
+    if isinstance(v, str):
+        value = _FRAME_BY_NAME.get(v.upper().removeprefix("MAV_FRAME_"))
+        if value is None:
+            raise ValueError(f"{v!r} is no MAV_FRAME of the upstream common.xml")
+        return value
+    return _count(0, 255)(v)
+
+
+def _frames(v: Any) -> frozenset[int]:
+    """location_frames = [MAV_FRAME names or numbers]."""
+    return frozenset(_values(v, "MAV_FRAME names or numbers", _frame_value))
+
+
+def _mission_commands(v: Any) -> frozenset[int] | tuple[CommandList, ...]:
+    """mission_commands = [names or numbers]: the mission commands the vehicle stores, in any
+    frame; or [{frames = [...], commands = [...]}, ...]: one list per set of frames (a
+    mission item in a frame no list has gets UNSUPPORTED_FRAME). Any other command in a
+    mission upload gets MAV_MISSION_UNSUPPORTED."""
+    what = "MAV_CMD names or numbers"
+    if not (isinstance(v, list) and v and all(isinstance(x, dict) for x in v)):
+        return frozenset(_values(v, f"{what} (or of tables with frames and commands)", _command_value))
+    table, seen = [], set()
+    for i, entry in enumerate(v):
+        if set(entry) != {"frames", "commands"}:
+            raise ValueError(f"list {i}: expected the keys frames and commands, got {sorted(entry)}")
+        try:
+            frames, commands = _frames(entry["frames"]), _values(entry["commands"], what, _command_value)
+        except ValueError as exc:
+            raise ValueError(f"list {i}: {exc}") from None
+        if frames & seen:
+            raise ValueError(f"list {i}: frame {min(frames & seen)} is in an earlier list too")
+        seen |= frames
+        table.append(CommandList(frames, frozenset(commands)))
+    return tuple(table)
 
 
 _KNOBS = (
@@ -132,11 +173,16 @@ _KNOBS = (
     Knob("capacity", BEHAVIOUR, "capacity", _capacity, "most items per plan type; more gets NO_SPACE"),
     Knob("supported_types", BEHAVIOUR, "supported_types", _types, "plan types stored; others get UNSUPPORTED"),
     Knob("request_int", BEHAVIOUR, "request_int", _bool, "request items with MISSION_REQUEST_INT (false: MISSION_REQUEST)"),
-    Knob("accept_unknown_commands", BEHAVIOUR, "item_rules", _unknown_commands,
+    Knob("accept_unknown_commands", RULES, "mission_commands", _unknown_commands,
          "mission items with commands the vehicle does not know are accepted (skipped when flown)"),
-    Knob("mission_commands", BEHAVIOUR, "item_rules", _mission_commands,
-         "the mission commands stored (MAV_CMD names or numbers); others get UNSUPPORTED "
-         "(default: every mission command of the upstream common.xml)"),
+    Knob("mission_commands", RULES, "mission_commands", _mission_commands,
+         "the mission commands stored (MAV_CMD names or numbers), or one list per set of frames "
+         "([{frames, commands}]: other frames get UNSUPPORTED_FRAME); others get UNSUPPORTED "
+         "(default: every mission command of the upstream common.xml, in any frame)"),
+    Knob("location_frames", RULES, "location_frames", _frames,
+         "frames a mission item whose command has a location may use (others: UNSUPPORTED_FRAME); "
+         "the frame of an item without one is not checked (default: global frames or "
+         "MAV_FRAME_MISSION for every item, a global frame for a destination)"),
     Knob("idle_reply", BEHAVIOUR, "idle_reply", _result_or_none, "MISSION_ACK for a stray item/request in idle (\"none\": silence)"),
     Knob("reack_last_item", BEHAVIOUR, "reack_last_item", _bool, "a late copy of the last item draws ACCEPTED again"),
     Knob("notify_upload_give_up", BEHAVIOUR, "notify_upload_give_up", _bool,

@@ -28,8 +28,9 @@ from typing import Any
 from ..errors import UsageError
 from ..mission.behaviour import ServerBehaviour
 from ..mission.timing import Timings
+from ..mission.validation import rules_for
 from ..vehicle import VehicleConfig
-from .knobs import BEHAVIOUR, CONFIG, KNOBS, TIMINGS
+from .knobs import BEHAVIOUR, CONFIG, KNOBS, RULES, TIMINGS
 from .model import Alternative, Documented, KnobSetting, Profile
 
 if sys.version_info >= (3, 11):
@@ -114,7 +115,7 @@ def _load(path: Path, depth: int) -> Profile:
 
 def _target(knob: str) -> tuple[str, str]:
     """Where a knob lands: two knobs may set the same engine field (accept_unknown_commands
-    and mission_commands both set the item rules), and only one of them can be in force."""
+    and mission_commands both set the item rules' commands), and only one of them can be in force."""
     return KNOBS[knob].where, KNOBS[knob].field
 
 
@@ -181,10 +182,13 @@ def _parse(name: str, value: Any, where: str) -> Any:
 
 
 def _build(settings: tuple[KnobSetting, ...], path: Path) -> tuple[ServerBehaviour, VehicleConfig]:
-    fields: dict[str, dict[str, Any]] = {BEHAVIOUR: {}, TIMINGS: {}, CONFIG: {}}
+    fields: dict[str, dict[str, Any]] = {BEHAVIOUR: {}, TIMINGS: {}, CONFIG: {}, RULES: {}}
     for s in settings:
         knob = KNOBS[s.knob]
         fields[knob.where][knob.field] = knob.parse(s.value)
+    rules = fields.pop(RULES)
+    if rules:   # the item rules are built from all their knobs at once
+        fields[BEHAVIOUR]["item_rules"] = rules_for(**rules)
     try:
         timings = Timings(**fields[TIMINGS])
         behaviour = ServerBehaviour(timings=timings, **fields[BEHAVIOUR])

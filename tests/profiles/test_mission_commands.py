@@ -1,6 +1,8 @@
 """The `mission_commands` knob (issue 13): which mission commands a profiled vehicle stores,
-by name or number, with the source of the list; the spec vehicle takes every mission command
-of the upstream XML."""
+by name or number (or per set of frames, as PX4 does), with the source of the list; the spec
+vehicle takes every mission command of the upstream XML. The `location_frames` knob: which
+frames an item with a location may use (ArduPilot: MAV_FRAME_MISSION too). Regression tests
+for what real PX4 and ArduPilot SITLs answered."""
 
 from __future__ import annotations
 
@@ -8,9 +10,12 @@ import pytest
 
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.mission.commands import LOCATION_COMMANDS, PLAN_COMMANDS, by_name
+from mavconform.reference_impl.mission.constants import MissionResult
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
 from mavconform.reference_impl.mission.validation import first_defect
 from mavconform.reference_impl.profiles import load_profile
+
+from ..rigs import vehicle_and_gcs
 
 # What QGroundControl puts in a survey or an inspection mission besides waypoints.
 QGC_COMMANDS = ("DO_SET_ROI_LOCATION", "DO_SET_ROI_NONE", "DO_SET_CAM_TRIGG_DIST",
@@ -96,3 +101,106 @@ def test_two_knobs_for_the_same_rules_in_one_file_are_refused(tmp_path) -> None:
     with pytest.raises(UsageError, match=r"knob\[1\] \(accept_unknown_commands\): sets what knob "
                                          r"'mission_commands' sets too"):
         load_profile(path)
+
+
+# --- what real targets answered (2026-11-24): `mavconform gcs upload` of a 3-item mission,
+# NAV_WAYPOINT frame 3, the command under test, NAV_WAYPOINT frame 3; the command in frame 3
+# (MAV_FRAME_GLOBAL_RELATIVE_ALT, with a position) or frame 2 (MAV_FRAME_MISSION, x=y=z=0) ---
+OK, U = None, MissionResult.UNSUPPORTED
+COMMANDS_TRIED = (16, 18, 115, 176, 183, 195, 206, 1000, 2000, 31999)
+# command -> its answers (frame 3, frame 2); PX4 v1.16.0 SITL (SIH), ArduCopter SITL 531699d6
+SEEN_ON_PX4 = {16: (OK, "not tried"), 18: (U, U), 115: (U, U), 176: (U, U), 183: (U, U),
+               195: (OK, U), 206: (U, OK), 1000: (U, OK), 2000: (U, OK), 31999: (U, U)}
+SEEN_ON_ARDUPILOT = {c: (OK, OK) for c in COMMANDS_TRIED} | {176: (U, U), 31999: (U, U)}
+SEEN = [(profile, command, frame, answers[i])
+        for profile, table in (("px4", SEEN_ON_PX4), ("ardupilot", SEEN_ON_ARDUPILOT))
+        for command, answers in table.items() for i, frame in enumerate((3, 2))
+        if answers[i] != "not tried"]
+
+
+def _uploaded(profile: str, command: int, frame: int) -> MissionResult | None:
+    """The NACK the profiled vehicle gives the 3-item mission (None: accepted), over the
+    reference GCS as `mavconform gcs upload` drives it (virtual time)."""
+    rig = vehicle_and_gcs(load_profile(profile).config, seed=3)
+    wp = lambda seq, north: MissionItem(seq, 3, 16, x=473977419 + north, y=85455938, z=30.0)  # noqa: E731
+    middle = (MissionItem(1, 3, command, x=473977919, y=85455938, z=30.0) if frame == 3
+              else MissionItem(1, 2, command))
+    result = rig.session.upload(MissionType.MISSION, [wp(0, 0), middle, wp(2, 1000)])
+    assert result.ok or result.nack is not None, result.summary()
+    return None if result.ok else MissionResult(result.nack)
+
+
+@pytest.mark.parametrize("profile, command, frame, seen", SEEN)
+def test_builtin_vehicles_answer_as_the_real_targets_did(profile: str, command: int, frame: int,
+                                                         seen: MissionResult | None) -> None:
+    assert _uploaded(profile, command, frame) == seen
+
+
+def test_px4_picks_the_command_list_by_frame_and_refuses_other_frames() -> None:
+    """parse_mavlink_mission_item: global frames take the positional list, MAV_FRAME_MISSION
+    the other one; a terrain or local frame is refused before the command is looked at."""
+    rules = load_profile("px4").behaviour.item_rules
+    setting = load_profile("px4").setting("mission_commands")
+    assert "v1.16.0" in setting.source and "parse_mavlink_mission_item" in setting.source
+    assert [sorted(t["frames"]) for t in setting.value] == [
+        ["GLOBAL", "GLOBAL_INT", "GLOBAL_RELATIVE_ALT", "GLOBAL_RELATIVE_ALT_INT"], ["MISSION"]]
+    for frame in (0, 5, 6):
+        assert first_defect(_item("NAV_TAKEOFF", frame), rules) is None
+    assert first_defect(_item("DO_JUMP", 2), rules) is None
+    assert first_defect(_item("DO_JUMP", 3), rules).code == U
+    for frame in (10, 11, 1, 7):     # terrain and local frames
+        assert first_defect(_item(31999, frame), rules).code == MissionResult.UNSUPPORTED_FRAME
+    assert first_defect(_item("NAV_WAYPOINT", 2), rules).code == U      # wrong list, not wrong frame
+
+
+def test_ardupilot_checks_the_frame_of_a_location_only() -> None:
+    """AP_Mission::mavlink_int_to_mission_cmd: a command with a location takes MAV_FRAME_MISSION
+    or a global frame (terrain too), nothing else; the frame of any other command is not read."""
+    rules = load_profile("ardupilot").behaviour.item_rules
+    setting = load_profile("ardupilot").setting("location_frames")
+    assert "mavlink_int_to_mission_cmd" in setting.source and "531699d6" in setting.source
+    for frame in (0, 2, 3, 5, 6, 10, 11):
+        assert first_defect(_item("NAV_LOITER_TURNS", frame), rules) is None, frame
+    for frame in (1, 7, 8):
+        assert first_defect(_item("NAV_LOITER_TURNS", frame), rules).code == MissionResult.UNSUPPORTED_FRAME
+        assert first_defect(_item("DO_CHANGE_SPEED", frame), rules) is None
+    fence = MissionItem(0, 2, 5003, param1=50.0, mission_type=MissionType.FENCE)   # fence: spec rules
+    assert first_defect(fence, rules).code == MissionResult.UNSUPPORTED_FRAME
+    spec = load_profile("spec").behaviour.item_rules
+    assert first_defect(_item("NAV_LOITER_TURNS", 2), spec).code == MissionResult.UNSUPPORTED_FRAME
+
+
+def test_a_user_profile_writes_a_frame_table_and_location_frames(tmp_path) -> None:
+    path = _write(tmp_path, 'name = "t"\n[[knob]]\nknob = "location_frames"\nvalue = ["MAV_FRAME_MISSION", 3]\n'
+                            '[[knob]]\nknob = "mission_commands"\n'
+                            '[[knob.value]]\nframes = ["GLOBAL_RELATIVE_ALT"]\ncommands = ["NAV_WAYPOINT"]\n'
+                            '[[knob.value]]\nframes = [2]\ncommands = ["DO_JUMP", "NAV_WAYPOINT"]\n')
+    rules = load_profile(path).behaviour.item_rules
+    assert first_defect(_item("NAV_WAYPOINT", 3), rules) is None
+    assert first_defect(_item("NAV_WAYPOINT", 2), rules) is None          # location_frames has 2
+    assert first_defect(_item("DO_JUMP", 3), rules).code == U
+    assert first_defect(_item("NAV_WAYPOINT", 0), rules).code == MissionResult.UNSUPPORTED_FRAME
+
+
+@pytest.mark.parametrize("value, words", [
+    ('[{frames = ["MISSION"], commands = ["DO_JUMP"]}, {frames = [2], commands = [16]}]',
+     ["list 1: frame 2 is in an earlier list too"]),
+    ('[{frames = ["NOWHERE"], commands = [16]}]', ["list 0: 'NOWHERE' is no MAV_FRAME"]),
+    ('[{frames = [], commands = [16]}]', ["list 0: expected a non-empty list of MAV_FRAME"]),
+    ('[{frames = [3], commands = [16, "NAV_WAYPOINT"]}]', ["list 0: 16 is listed twice"]),
+    ('[{frames = [3]}]', ["list 0: expected the keys frames and commands"]),
+])
+def test_bad_frame_tables_are_one_line_naming_the_knob(tmp_path, value: str, words: list[str]) -> None:
+    path = _write(tmp_path, f'name = "x"\n[[knob]]\nknob = "mission_commands"\nvalue = {value}\n')
+    with pytest.raises(UsageError) as err:
+        load_profile(path)
+    message = str(err.value)
+    assert "\n" not in message and "knob[0] (mission_commands)" in message, message
+    assert all(w in message for w in words), message
+
+
+def test_bad_location_frames_are_refused(tmp_path) -> None:
+    for value, words in (('["MISSION", 2]', "listed twice"), ("[300]", "0..255"), ('"MISSION"', "non-empty list")):
+        path = _write(tmp_path, f'name = "x"\n[[knob]]\nknob = "location_frames"\nvalue = {value}\n')
+        with pytest.raises(UsageError, match=words):
+            load_profile(path)
