@@ -1,8 +1,11 @@
 """The run document: everything a run decided, as the canonical JSON the reports render.
 
-Format "mavconform-run/1" (reports/run_document.py checks it). It is built once, at the
-end of a run, from the results and the run's options; every report is a view of it. A run
-stopped by a signal says so (`run.interrupted`, where and by what) and its verdict is
+Format "mavconform-run/2" (reports/run_document.py checks it and says where what lives). It
+is built once, at the end of a run, from the results and the run's options; every report
+is a view of it. What differs between two runs of the same target (start time, durations,
+event times, forced waits, the target's ephemeral address, the numbers of `Measured`
+texts) goes into its `volatile` section only, so the rest diffs to nothing. A run stopped
+by a signal says so (`run.interrupted`, where and by what) and its verdict is
 "interrupted": the clauses it did not reach are skipped, not passed.
 """
 
@@ -14,12 +17,13 @@ from typing import Any
 
 from mavconform import __version__
 
+from mavconform.reports.run_document import FORMAT
+
 from .catalogue import BY_ID
 from .gating import verdict
+from .harness.measured import Measured
 from .outcome import ClauseResult, Outcome
-from .runner import RunOutcome
-
-FORMAT = "mavconform-run/1"
+from .runner import DecidedResult, RunOutcome
 
 
 @dataclass(frozen=True)
@@ -39,24 +43,33 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
     for r in run.results:
         counts[r.outcome.value] += 1
     failing = sum(1 for flag in gating_flags.values() if flag)
+    identity = None if run.identity is None else dict(run.identity)
+    address = identity.pop("address", None) if identity is not None else None
+    clauses, per_clause = [], {}
+    for r in run.results:
+        clauses.append(_clause(r, gating_flags.get(r.clause_id, False)))
+        per_clause[r.clause_id] = _volatile(r, clauses[-1])
     return {
         "format": FORMAT,
         "tool": {"name": "mavconform", "version": __version__},
         "run": {
-            "target": options.target, "started": started.strftime("%Y-%m-%dT%H:%M:%SZ"),
-            "duration_s": round(run.duration_s, 3), "seed": options.seed,
+            "target": options.target, "seed": options.seed,
             "time_scale": options.time_scale, "strict": options.strict, "clauses": options.clauses,
             "expectations": options.expectations, "baseline": options.baseline,
-            "forced_wait_s": round(run.forced_wait_s, 3), "interrupted": run.interrupted,
+            "interrupted": run.interrupted,
             "interrupted_at": run.interrupted_at, "interrupted_by": run.interrupted_by,
         },
-        "identity": run.identity,
+        "identity": identity,
         "summary": {"total": len(run.results), **counts, "gating_failures": failing,
                     "verdict": verdict(failing, interrupted=run.interrupted)},
         "gating": gating,
         "restore": run.restore,
         "capture": capture,
-        "clauses": [_clause(r, gating_flags.get(r.clause_id, False)) for r in run.results],
+        "clauses": clauses,
+        "volatile": {"started": started.strftime("%Y-%m-%dT%H:%M:%SZ"),
+                     "duration_s": round(run.duration_s, 3),
+                     "forced_wait_s": round(run.forced_wait_s, 3),
+                     "address": address, "clauses": per_clause},
     }
 
 
@@ -65,4 +78,32 @@ def _clause(r: ClauseResult, gating: bool) -> dict[str, Any]:
     return {"id": c.id, "group": c.group, "level": c.level.value, "role": c.role.value,
             "title": c.title, "source": c.source, "requirement": c.requirement,
             "outcome": r.outcome.value, "gating": gating, "detail": r.detail,
-            "expectation": r.expectation, "duration_s": r.duration_s, "exchange": r.exchange}
+            "expectation": r.expectation, "exchange": r.exchange}
+
+
+def _volatile(r: ClauseResult, clause: dict[str, Any]) -> dict[str, Any]:
+    """Take the clause's volatile values out of `clause` (its detail and exchange become
+    stable) and return them, for volatile.clauses[ID]."""
+    entry: dict[str, Any] = {"duration_s": r.duration_s}
+    detail, values = str(r.detail), {}
+    for text in (r.measured if isinstance(r, DecidedResult) else []):
+        if text.values and str(text) in detail:   # an expectation may have reworded around it
+            detail = detail.replace(str(text), text.stable)
+            values.update(text.values)
+    clause["detail"] = detail
+    if values:
+        entry["detail"] = values
+    events, times, notes = [], [], {}
+    for index, event in enumerate(r.exchange):
+        event = {key: value for key, value in event.items() if key != "t"}
+        times.append(r.exchange[index].get("t", 0.0))
+        if isinstance(event["msg"], Measured):
+            if event["msg"].values:
+                notes[str(index)] = dict(event["msg"].values)
+            event["msg"] = event["msg"].stable
+        events.append(event)
+    clause["exchange"] = events
+    entry["events"] = times
+    if notes:
+        entry["notes"] = notes
+    return entry

@@ -33,6 +33,7 @@ from .checks import CHECKS
 from .clause import Clause
 from .harness import procedures
 from .harness.exchange import Exchange
+from .harness.measured import Measured
 from .outcome import (ClauseFailed, ClauseResult, NotApplicable, Outcome, PreconditionFailed,
                       Skipped, TargetUnresponsive)
 from .session import Session
@@ -54,6 +55,34 @@ class RunOutcome:
     interrupted_by: str | None = None   # "SIGINT", "SIGTERM"
     late_signal: str | None = None      # a signal that came while restoring or reporting, held back
     snapshot: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
+class DecidedResult(ClauseResult):
+    """A clause's result as `run_one` decided it, with the `Measured` texts its detail was
+    made from: the run document keeps their numbers apart from the detail's stable text
+    (conformance/document.py), even once an expectation has reworded the detail."""
+    measured: list[Measured] = field(default_factory=list)
+
+
+def _measured(*raised: BaseException | str | None) -> list[Measured]:
+    """The Measured texts in what a check returned or raised, and in what that wrapped."""
+    found: list[Measured] = []
+    seen: set[int] = set()
+    todo = list(raised)
+    while todo:
+        item = todo.pop(0)
+        if isinstance(item, Measured):
+            found.append(item)
+        elif isinstance(item, BaseException) and id(item) not in seen:
+            seen.add(id(item))
+            todo += [*item.args, item.__cause__, item.__context__]
+    return found
+
+
+def _text(exc: BaseException) -> str:
+    """The exception's message; a Measured one as it is, so it keeps its stable form."""
+    return exc.args[0] if len(exc.args) == 1 and isinstance(exc.args[0], Measured) else str(exc)
 
 
 class InterruptGuard:
@@ -253,22 +282,30 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     began_at = len(session.t.node.inbox)
     session.current_clause = clause.id
     _mark(session, f"clause {clause.id}")
+    caught: list[BaseException | str] = []   # what the detail was made from
     try:
         outcome, detail = Outcome.PASS, fn(session) or ""
+        caught.append(detail)
     except ClauseFailed as exc:
-        outcome, detail = Outcome.FAIL, str(exc)
+        outcome, detail = Outcome.FAIL, _text(exc)
+        caught.append(exc)
     except NotApplicable as exc:
-        outcome, detail = Outcome.NOT_APPLICABLE, str(exc)
+        outcome, detail = Outcome.NOT_APPLICABLE, _text(exc)
+        caught.append(exc)
     except Skipped as exc:
-        outcome, detail = Outcome.SKIPPED, str(exc)
+        outcome, detail = Outcome.SKIPPED, _text(exc)
+        caught.append(exc)
     except PreconditionFailed as exc:
         outcome, detail = Outcome.ERROR, f"precondition: {exc}"
+        caught.append(exc)
         try:
             session.t.check_alive()   # a setup step that got nothing from a dead target
         except TargetUnresponsive as dead:
             detail = f"target unresponsive: {dead}"
+            caught.append(dead)
     except TargetUnresponsive as exc:
         outcome, detail = Outcome.ERROR, f"target unresponsive: {exc}"
+        caught.append(exc)
     except Exception as exc:   # a bug in the check: ours, never the target's failure
         where = traceback.extract_tb(exc.__traceback__)[-1]
         outcome, detail = Outcome.ERROR, (f"internal error in check {fn.__name__}: "
@@ -282,7 +319,8 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
         t.exchange = None
     _settle(session, began_at)
     _mark(session, f"clause {clause.id}: {outcome.value}", "info" if outcome is Outcome.PASS else "warning")
-    return ClauseResult(clause.id, outcome, detail, round(end - begin, 6), events)
+    return DecidedResult(clause.id, outcome, detail, round(end - begin, 6), events,
+                         measured=_measured(*caught))
 
 
 SETTLE_QUIET = 0.005   # s without a frame that counts as "the target has finished replying"

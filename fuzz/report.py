@@ -1,9 +1,14 @@
-"""A campaign as a run document ("mavconform-run/1"), so every report writer shows it.
+"""A campaign as a run document ("mavconform-run/2"), so every report writer shows it.
 
 Each invariant the mode checks is one row, like a clause: `FUZZ.PROTOCOL.atomic-upload`
 passes if no example broke it and fails with the finding's detail, the replay command and
 the replayed exchange (drawn as a sequence diagram in the HTML report) if one did. The
 document also carries a `fuzz` block: the campaign's counters and every saved case.
+
+As in a conformance run, what differs between two campaigns with the same seed and budget
+(when it started, how long it took, the times of the replayed exchange) is in the
+`volatile` section only: two campaigns with the same seed and budget against an in-process
+target write fuzz.json files that diff to nothing outside it.
 
 An interrupted campaign is marked so (`run.interrupted`, `run.interrupted_at`, where known
 `run.interrupted_by`, and `fuzz.interrupted`). Its verdict is "fail" if it found something (a finding stands, however
@@ -39,8 +44,7 @@ def campaign_document(result: CampaignResult) -> dict[str, Any]:
     failing = sum(1 for r in rows if r["gating"])
     counts = outcome_counts(rows)
     run: dict[str, Any] = {
-        "target": opts.target, "started": result.started.strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "duration_s": round(result.duration_s, 3), "seed": opts.seed, "mode": opts.mode,
+        "target": opts.target, "seed": opts.seed, "mode": opts.mode,
         "examples": result.examples, "units": result.units,
         "budget": (f"{opts.examples} examples" if opts.examples is not None else "")
         + (" / " if opts.examples is not None and opts.time_s is not None else "")
@@ -63,6 +67,11 @@ def campaign_document(result: CampaignResult) -> dict[str, Any]:
                     "detail": "a fuzz campaign does not put back the target's plans"},
         "capture": str(first_capture) if first_capture is not None else None,
         "clauses": rows,
+        "volatile": {
+            "started": result.started.strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "duration_s": round(result.duration_s, 3),
+            "clauses": {row["id"]: _volatile(row) for row in rows},
+        },
         "fuzz": {"mode": opts.mode, "examples": result.examples, "units": result.units,
                  "interrupted": result.interrupted,
                  "findings": [_finding(f) for f in result.findings]},
@@ -90,6 +99,13 @@ def _row(mode: str, name: str, description: str, findings: list[Finding], unbrok
         "detail": detail, "expectation": None, "duration_s": 0.0,
         "exchange": findings[0].exchange if failed else [],
     }
+
+
+def _volatile(row: dict[str, Any]) -> dict[str, Any]:
+    """Take the row's event times out of its exchange, for volatile.clauses[ID]."""
+    times = [event.get("t", 0.0) for event in row["exchange"]]
+    row["exchange"] = [{k: v for k, v in event.items() if k != "t"} for event in row["exchange"]]
+    return {"duration_s": row.pop("duration_s"), "events": times}
 
 
 def _finding(f: Finding) -> dict[str, Any]:

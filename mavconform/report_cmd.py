@@ -69,15 +69,16 @@ def draft_expectations(args: argparse.Namespace) -> int:
 
     from mavconform.conformance import expectations
     from mavconform.reports import load_run
+    from mavconform.reports.run_document import clause_detail, run_facts
     doc = load_run(args.run_json)
     base = expectations.load(args.base) if args.base else {}
-    seen_on = args.seen_on.strip() or f"{doc['run']['target']}, {doc['run']['started'][:10]}"
+    seen_on = args.seen_on.strip() or f"{doc['run']['target']}, {run_facts(doc)['started'][:10]}"
     out = [f"description = {json.dumps(f'Clauses {seen_on} fails, drafted from {Path(args.run_json).name}')}"]
     for clause in doc["clauses"]:
         if clause["outcome"] not in ("fail", "known-deviation"):
             continue
         known = base.get(clause["id"])
-        detail = clause["detail"]
+        detail = clause_detail(doc, clause)   # as the run printed it: with its measured numbers
         if detail.startswith(expectations.OTHER_FAILURE_PREFIX):
             detail = detail.split("): ", 1)[-1]
         entry = {"clause": clause["id"], "variant": known.variant if known else "",

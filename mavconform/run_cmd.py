@@ -109,11 +109,12 @@ def _printer():
 
 
 def _summary(doc: dict[str, Any], report_dir: str) -> None:
+    from mavconform.reports.run_document import run_facts
     s = doc["summary"]
-    ident = doc["identity"]
-    who = (f"system {ident['system']} component {ident['component']} at {ident['address']}"
+    ident, timing = doc["identity"], run_facts(doc)
+    who = (f"system {ident['system']} component {ident['component']} at {timing['address']}"
            if ident else "no HEARTBEAT")
-    print(f"\ntarget {doc['run']['target']} ({who}); {doc['run']['duration_s']:.1f} s")
+    print(f"\ntarget {doc['run']['target']} ({who}); {timing['duration_s']:.1f} s")
     print("  outcome          clauses")
     for name in ("pass", "fail", "known-deviation", "not-applicable", "skipped", "error"):
         print(f"  {name:<16} {s[name]:>7}")

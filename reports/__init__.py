@@ -1,6 +1,6 @@
 """Reports of a conformance run: pure functions from the run document to files.
 
-`run_document` defines and checks the document (format "mavconform-run/1"); `junit`,
+`run_document` defines and checks the document (format "mavconform-run/2"); `junit`,
 `markdown` and `html` render it; `write` puts all of them in a folder. The MCAP capture is
 recorded by the runner during the run and only linked from here.
 """

@@ -1,34 +1,45 @@
 """The HTML report: one self-contained file to attach to a CI run or mail to a vendor.
 
 Inline CSS, inline SVG, no scripts and no external assets, so it opens anywhere, offline,
-years later. The "only not passing" filter is CSS (`:has`); where that is unsupported the
-page simply shows everything. Every string from the document goes through `html.escape`:
-details and fields come from a target on the wire and may contain anything.
+years later. What a reader opens it for comes first: right under the verdict, "What failed"
+lists every clause that did not pass (those that fail the run first), each with its
+requirement, its verdict and its exchange, the deciding message highlighted; the run's facts
+and the full matrix follow. The "only not passing" filter is CSS (`:has`); where that is
+unsupported the page simply shows everything. Every string from the document goes through
+`html.escape`: details and fields come from a target on the wire and may contain anything.
+Times and durations are read through run_document's accessors, wherever the document keeps them.
 """
 
 from __future__ import annotations
 
+import os
 import re
 from html import escape
+from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from mavconform.reports.run_document import PASS, outcome_counts
+from mavconform.reports import run_document as rd
+from mavconform.reports.deciding import deciding_event
+from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
-from mavconform.reports.text import clean, interruption, one_line, run_facts, verdict_headline
+from mavconform.reports.text import (clean, identity_text, interruption, one_line, seconds,
+                                     value_text, verdict_headline)
 
 OUTCOME_COLOURS = {"pass": "#1a7f37", "fail": "#cf222e", "known-deviation": "#9a6700",
                    "not-applicable": "#6e7781", "skipped": "#57606a", "error": "#8250df"}
+INDEX_DETAIL_CHARS = 160   # a verdict in the "What failed" list; its section has all of it
 
 CSS = """
 body { font: 15px/1.45 system-ui, sans-serif; margin: 0 auto; max-width: 1200px;
        padding: 1em 2em; color: #1f2328; }
 h1 { margin-bottom: .2em; } h2 { border-bottom: 1px solid #d0d7de; padding-bottom: .2em; }
-.verdict { font-size: 1.6em; font-weight: 700; }
+.verdict { font-size: 1.6em; font-weight: 700; margin: .2em 0; }
 .verdict.pass { color: #1a7f37; } .verdict.fail { color: #cf222e; }
 .verdict.interrupted { color: #9a6700; }
 p.interrupted { background: #fff8c5; border: 1px solid #d4a72c; border-radius: 4px;
                 padding: .5em 1em; font-weight: 600; }
+p.tally { color: #57606a; margin-top: 0; }
 table { border-collapse: collapse; margin: .5em 0; }
 th, td { border: 1px solid #d0d7de; padding: .25em .6em; text-align: left; vertical-align: top; }
 table.facts th { background: #f6f8fa; font-weight: 600; }
@@ -39,31 +50,45 @@ td.n { text-align: right; font-variant-numeric: tabular-nums; }
 """ + "".join(f".badge.o-{name} {{ background: {colour}; }}\n"
               for name, colour in OUTCOME_COLOURS.items()) + """
 code, .id { font-family: ui-monospace, monospace; }
+section#what-failed { border: 2px solid #cf222e; border-radius: 6px; padding: 0 1em 1em;
+                      margin: 1em 0 2em; }
+section#what-failed.none { border-color: #1a7f37; }
+ol.failed-index { padding-left: 1.5em; } ol.failed-index li { margin: .2em 0; }
+ol.failed-index .why { color: #57606a; font-size: .9em; display: block; }
+h3.part { margin-top: 1.5em; color: #57606a; }
 blockquote { margin: .5em 0; padding: .3em 1em; border-left: 4px solid #d0d7de;
              background: #f6f8fa; }
 blockquote cite { display: block; font-size: .85em; color: #57606a; }
 .detail { white-space: pre-wrap; font-family: ui-monospace, monospace; background: #fff8c5;
           padding: .4em .8em; border-radius: 4px; }
-section.clause { margin: 1.5em 0 2.5em; }
+section.clause { margin: 1.5em 0 2.5em; border-top: 1px solid #d0d7de; }
 .diagram { overflow-x: auto; border: 1px solid #d0d7de; border-radius: 4px; }
-svg.sequence { font: 11px ui-monospace, monospace; }
+svg.sequence { font: 11px ui-monospace, monospace; display: block; }
 svg.sequence line.lifeline { stroke: #8c959f; stroke-dasharray: 4 3; }
 svg.sequence rect.actor { fill: #eaeef2; stroke: #57606a; }
+svg.sequence rect.actor.target { fill: #ddf4ff; stroke: #0969da; }
 svg.sequence text.actor { text-anchor: middle; font-weight: 700; }
 svg.sequence text.time { text-anchor: end; fill: #57606a; }
-svg.sequence .arrow text { text-anchor: middle; }
+svg.sequence tspan.msg { font-weight: 700; }
 svg.sequence .arrow.tx line { stroke: #0969da; stroke-width: 1.5; }
 svg.sequence .arrow.tx polygon, svg.sequence .arrow.tx text { fill: #0969da; }
 svg.sequence .arrow.rx line { stroke: #1a7f37; stroke-width: 1.5; }
 svg.sequence .arrow.rx polygon, svg.sequence .arrow.rx text { fill: #1a7f37; }
+svg.sequence .arrow.decided line { stroke-width: 3; }
 svg.sequence .note rect { fill: #fff8c5; stroke: #d4a72c; }
-svg.sequence .note text { text-anchor: middle; fill: #6e5700; }
+svg.sequence .note text { fill: #6e5700; }
+svg.sequence .note.decided rect { stroke: #cf222e; stroke-width: 2; }
+svg.sequence rect.decided-band { fill: #ffebe9; }
+svg.sequence text.time.decided-mark { fill: #cf222e; font-weight: 700; }
+p.decided-key { font-size: .85em; color: #57606a; margin: .2em 0 0; }
+p.decided-key b { color: #cf222e; }
 body:has(#only-not-passing:checked) tr.o-pass { display: none; }
 """
 
 
-def html_report(doc: dict[str, Any]) -> str:
-    """The run document as one HTML page (UTF-8 text, no external references)."""
+def html_report(doc: dict[str, Any], *, folder: str | Path | None = None) -> str:
+    """The run document as one HTML page (UTF-8 text, no external references). `folder`:
+    where the page will be written, so the capture link is relative to it."""
     summary, clauses = doc["summary"], doc["clauses"]
     verdict = summary["verdict"]
     target = one_line(doc["run"]["target"])
@@ -79,16 +104,11 @@ def html_report(doc: dict[str, Any]) -> str:
     stopped = interruption(doc)
     if stopped is not None:
         out.append(f'<p class="interrupted">{escape(stopped)}</p>')
-    out += _facts(doc)
-    out += _counts(clauses)
+    out.append(_tally(clauses))
+    out += _what_failed(doc, stopped is not None)
     out += _gating(doc)
+    out += ["<h2>Run</h2>", *_facts(doc, folder), *_counts(clauses)]
     out += _matrix(clauses)
-    not_passing = [c for c in clauses if c["outcome"] != PASS]
-    out.append(f"<h2>Clauses not passing ({len(not_passing)})</h2>")
-    if not not_passing:
-        out.append("<p>Every clause passed.</p>")
-    for clause in not_passing:
-        out += _finding(clause)
     passing = [c for c in clauses if c["outcome"] == PASS]
     if passing:
         out.append(f"<h2>Passing clauses ({len(passing)})</h2>")
@@ -97,27 +117,137 @@ def html_report(doc: dict[str, Any]) -> str:
                        f'<span class="id">{escape(one_line(clause["id"]))}</span> '
                        f'{escape(one_line(clause["title"]))}</summary>')
             out += _requirement(clause)
-            out.append(_diagram(clause))
+            out.append(_diagram(doc, clause))
             out.append("</details>")
     out += ["</body>", "</html>", ""]
     return "\n".join(out)
 
 
-def _facts(doc: dict[str, Any]) -> list[str]:
+def not_passing(clauses: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The clauses "What failed" shows, in its order: those failing the run, then the rest
+    that did not pass (SHOULD failures, known deviations, ...); within each, by outcome
+    (fail, known-deviation, not-applicable, skipped, error), then in run order."""
+    rank = {outcome: i for i, outcome in enumerate(OUTCOMES)}   # fail before error
+    return sorted((c for c in clauses if c["gating"] or c["outcome"] != PASS),
+                  key=lambda c: (not c["gating"], rank[c["outcome"]]))
+
+
+def _tally(clauses: list[dict[str, Any]]) -> str:
+    counts = [f"{n} {outcome}" for outcome, n in outcome_counts(clauses).items() if n]
+    return f'<p class="tally">{len(clauses)} clauses: {escape(", ".join(counts) or "none")}</p>'
+
+
+def _what_failed(doc: dict[str, Any], interrupted: bool) -> list[str]:
+    shown = not_passing(doc["clauses"])
+    gating = [c for c in shown if c["gating"]]
+    rest = shown[len(gating):]
+    if not shown:
+        said = ("Nothing failed before the run was interrupted." if interrupted
+                else "Every clause passed.")
+        return ['<section id="what-failed" class="none">', "<h2>What failed</h2>",
+                f"<p>{said}</p>", "</section>"]
+    said = [f"{_clauses(len(gating))} fail{'s' if len(gating) == 1 else ''} the run"
+            if gating else "No clause fails the run"]
+    if rest:
+        said.append(f"{_clauses(len(rest), 'more ' if gating else '')} did not pass but "
+                    f"do{'es' if len(rest) == 1 else ''} not fail it")
+    out = ['<section id="what-failed">', f"<h2>What failed ({len(shown)})</h2>",
+           f"<p>{'; '.join(said)}.</p>", '<ol class="failed-index">']
+    for clause in shown:
+        why = one_line(rd.clause_detail(doc, clause), INDEX_DETAIL_CHARS)
+        out.append(f'<li>{_badge(clause["outcome"])} <a class="id" href="#{_anchor(clause)}">'
+                   f'{escape(one_line(clause["id"]))}</a> {escape(clause["level"])} '
+                   f'{escape(one_line(clause["title"]))}'
+                   + (f'<span class="why">{escape(why)}</span>' if why else "") + "</li>")
+    out.append("</ol>")
+    for part, members in (("Fails the run", gating), ("Did not pass, does not fail the run", rest)):
+        if members:
+            out.append(f'<h3 class="part">{part} ({len(members)})</h3>')
+            for clause in members:
+                out += _finding(doc, clause)
+    out.append("</section>")
+    return out
+
+
+def _clauses(n: int, more: str = "") -> str:
+    return f"{n} {more}clause{'' if n == 1 else 's'}"
+
+
+def _facts(doc: dict[str, Any], folder: str | Path | None) -> list[str]:
     rows = [f"<tr><th>{escape(label)}</th><td>{escape(value)}</td></tr>"
-            for label, value in run_facts(doc)]
+            for label, value in _fact_rows(doc)]
     if doc["capture"] is not None:
         capture = one_line(doc["capture"])
-        rows.append(f'<tr><th>capture</th><td><a href="{escape(quote(capture))}">'
+        href = _capture_href(capture, folder)
+        rows.append(f'<tr><th>capture</th><td><a href="{escape(quote(href))}">'
                     f"{escape(capture)}</a> (MCAP: every datagram, decoded; opens in "
                     f"Foxglove)</td></tr>")
     return ['<table class="facts">', *rows, "</table>"]
 
 
+# run keys shown by name (the volatile ones come from run_document.run_facts)
+_RUN_LABELS = {"seed": "seed", "time_scale": "time scale", "strict": "strict",
+               "clauses": "clauses selected", "expectations": "expectations file",
+               "baseline": "baseline"}
+_SHOWN_APART = {"target", "started", "duration_s", "forced_wait_s", "interrupted",
+                "interrupted_at", "interrupted_by"}
+
+
+def _fact_rows(doc: dict[str, Any]) -> list[tuple[str, str]]:
+    run, volatile = doc["run"], rd.run_facts(doc)
+    identity = doc.get("identity")
+    steady = {k: v for k, v in identity.items() if k != "address"} if identity else None
+    missing = "not recorded by a fuzz campaign" if "fuzz" in doc else "no answer from the target"
+    facts: list[tuple[str, Any]] = [
+        ("tool", f"{doc['tool']['name']} {doc['tool']['version']}"), ("target", run["target"]),
+        ("identity", identity_text(steady, missing))]
+    if volatile.get("address"):
+        facts.append(("address", volatile["address"]))
+    if volatile.get("started"):
+        facts.append(("started", volatile["started"]))
+    if volatile.get("duration_s") is not None:
+        facts.append(("duration", seconds(volatile["duration_s"])))
+    if volatile.get("forced_wait_s") is not None:
+        facts.append(("forced waits", seconds(volatile["forced_wait_s"])))
+    keys = [k for k in _RUN_LABELS if k in run] + sorted(
+        k for k in run if k not in _RUN_LABELS and k not in _SHOWN_APART)
+    for key in keys:
+        value = run[key]
+        shown = "none" if value is None else value if isinstance(value, str) else value_text(value)
+        facts.append((_RUN_LABELS.get(key, key), shown))
+    for key, label in (("stored_form", "plans compared as"), ("prepared", "target prepared")):
+        if (identity or {}).get(key):
+            facts.append((label, identity[key]))
+    if run.get("interrupted"):
+        facts.append(("interrupted", " ".join(
+            ["yes"] + ([f"by {run['interrupted_by']}"] if run.get("interrupted_by") else [])
+            + ([f"during {run['interrupted_at']}"] if run.get("interrupted_at") else []))))
+    facts.append(("gating", doc["gating"]["mode"]))
+    restore = doc["restore"]
+    facts.append(("plans after the run", f"{restore['status']}: {restore['detail']}"
+                  if restore["detail"] else restore["status"]))
+    return [(label, one_line(str(value))) for label, value in facts]
+
+
+def _capture_href(capture: str, folder: str | Path | None) -> str:
+    """The capture as a link from `folder`. A conformance run names its capture inside the
+    report folder ("run.mcap"); a fuzz campaign names it where --findings put it, relative
+    to the working folder or absolute, which --report-dir need not be."""
+    if folder is None:
+        return capture
+    path, base = Path(capture), Path(folder)
+    if not path.is_absolute() and (base / path).exists():
+        return capture
+    if path.is_absolute() or path.exists():
+        return Path(os.path.relpath(path.resolve(), base.resolve())).as_posix()
+    return capture
+
+
 def _counts(clauses: list[dict[str, Any]]) -> list[str]:
-    rows = [f'<tr><td>{_badge(outcome)}</td><td class="n">{count}</td></tr>'
-            for outcome, count in outcome_counts(clauses).items()]
-    return ["<h2>Outcomes</h2>", "<table>", *rows,
+    counts = outcome_counts(clauses)
+    rows = [f'<tr><td>{_badge(outcome)}</td><td class="n">{counts[outcome]}</td></tr>'
+            for outcome in OUTCOMES]
+    return ["<h3>Outcomes</h3>", "<table>", *rows,
             f'<tr><th>total</th><td class="n">{len(clauses)}</td></tr>', "</table>"]
 
 
@@ -163,19 +293,22 @@ def _matrix(clauses: list[dict[str, Any]]) -> list[str]:
     return out
 
 
-def _finding(clause: dict[str, Any]) -> list[str]:
+def _finding(doc: dict[str, Any], clause: dict[str, Any]) -> list[str]:
     gating = "fails the run" if clause["gating"] else "does not fail the run"
+    duration = rd.clause_duration(doc, clause)
+    took = f", took {duration:.3f} s" if duration else ""
     out = [f'<section class="clause" id="{_anchor(clause)}">',
-           f'<h3>{_badge(clause["outcome"])} <span class="id">{escape(one_line(clause["id"]))}'
-           f'</span> {escape(one_line(clause["title"]))}</h3>',
+           f'<h4>{_badge(clause["outcome"])} <span class="id">{escape(one_line(clause["id"]))}'
+           f'</span> {escape(clause["level"])} {escape(one_line(clause["title"]))}</h4>',
            f"<p>{escape(clause['level'])}, role {escape(one_line(clause['role']))}, "
-           f"{gating}, took {clause['duration_s']:.3f} s.</p>"]
+           f"{gating}{took}.</p>"]
     out += _requirement(clause)
-    if clause["detail"]:
-        out.append(f'<p class="detail">{escape(clean(clause["detail"]))}</p>')
+    detail = rd.clause_detail(doc, clause)
+    if detail:
+        out.append(f'<p class="detail">{escape(clean(detail))}</p>')
     if clause["expectation"]:
         out.append(f"<p>Expected deviation: {escape(clean(clause['expectation']))}</p>")
-    out += [_diagram(clause), "</section>"]
+    out += [_diagram(doc, clause), "</section>"]
     return out
 
 
@@ -184,8 +317,23 @@ def _requirement(clause: dict[str, Any]) -> list[str]:
             f"<cite>{escape(one_line(clause['source']))}</cite></blockquote>"]
 
 
-def _diagram(clause: dict[str, Any]) -> str:
-    return f'<div class="diagram">{sequence_diagram(clause["exchange"])}</div>'
+def _diagram(doc: dict[str, Any], clause: dict[str, Any]) -> str:
+    events = rd.clause_events(doc, clause)
+    decided = deciding_event(clause, events, rd.clause_detail(doc, clause))
+    svg = sequence_diagram(events, decided=decided, target=_target_lane(clause))
+    out = f'<div class="diagram">{svg}</div>'
+    if decided is not None:
+        how = ("as the check recorded it" if isinstance(clause.get("decided_by"), int)
+               else "as read from the verdict")
+        out += (f'<p class="decided-key"><b>▶</b> on a red band: the event that decided the '
+                f"verdict ({how}).</p>")
+    return out
+
+
+def _target_lane(clause: dict[str, Any]) -> str:
+    """The target's lane is named for the role the clause tests it in ("vehicle", "gcs")."""
+    role = one_line(clause.get("role") or "")
+    return role if role in ("vehicle", "gcs") else "target"
 
 
 def _badge(outcome: str) -> str:
@@ -195,4 +343,3 @@ def _badge(outcome: str) -> str:
 def _anchor(clause: dict[str, Any]) -> str:
     """A fragment id from the clause id (letters, digits, . _ - kept; each id is unique)."""
     return "clause-" + re.sub(r"[^A-Za-z0-9._-]", "_", clause["id"])
-

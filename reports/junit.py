@@ -1,10 +1,26 @@
 """JUnit XML: the run as one test suite, so CI systems show each clause as a test case.
 
 CI tools (GitLab, Jenkins, GitHub test-reporter actions) read this dialect of JUnit: one
-<testcase> per clause, <failure>/<error>/<skipped> children, counts on <testsuite>. A known
-deviation passes (the expectations file accepted it) but says so in <system-out>, so it
-stays visible; an interrupted run says so in the suite's <system-err>. Text from the target
-is cleaned: XML 1.0 cannot carry control characters.
+<testcase> per clause, <failure>/<error>/<skipped> children, counts on <testsuite>. They
+colour a job by its <failure> and <error> cases, so only what fails the run is one (the
+clauses counted in summary.gating_failures), and the tests a CI view shows red are the
+reasons the job's exit code is 1:
+
+    pass                                  a plain <testcase>
+    fail that fails the run               <failure message=DETAIL type=LEVEL>
+    error that fails the run              <error message=DETAIL type="error">
+    fail or error that does not           <skipped message="not gating (WHY): DETAIL">
+      (a SHOULD failure without --strict, a MAY clause, a baseline run's non-regression)
+    known deviation                       <skipped message="known deviation (REASON): DETAIL">
+    not-applicable, skipped               <skipped message="OUTCOME: DETAIL">
+
+<skipped> is what every one of those viewers lists with its message and leaves out of the
+red count (pytest writes an xfail the same way), so a known deviation's reason and a SHOULD
+failure stay in sight on a green job. Every case that did not pass also carries
+<properties> (outcome, level, gating, expectation) for tools that read them, and the
+requirement, detail and exchange in its <system-out> (or its <failure>/<error> text).
+An interrupted run says so in the suite's <system-err>. Text from the target is cleaned:
+XML 1.0 cannot carry control characters.
 """
 
 from __future__ import annotations
@@ -13,7 +29,7 @@ import xml.etree.ElementTree as ET
 from typing import Any
 
 from mavconform.reports.run_document import (
-    ERROR, FAIL, KNOWN_DEVIATION, NOT_APPLICABLE, SKIPPED, outcome_counts,
+    ERROR, FAIL, KNOWN_DEVIATION, PASS, clause_detail, clause_duration, clause_events, run_facts,
 )
 from mavconform.reports.text import clean, exchange_lines, interruption, one_line, value_text
 
@@ -23,27 +39,53 @@ MESSAGE_LIMIT = 500  # characters in a message attribute (CI tools show it as a 
 
 def junit_xml(doc: dict[str, Any]) -> str:
     """The run document as a JUnit XML string (UTF-8 declaration, trailing newline)."""
-    counts = outcome_counts(doc["clauses"])
+    clauses = doc["clauses"]
+    timing = run_facts(doc)
     suite = ET.Element("testsuite", {
         "name": SUITE_NAME,
-        "tests": str(len(doc["clauses"])),
-        "failures": str(counts[FAIL]),
-        "errors": str(counts[ERROR]),
-        "skipped": str(counts[SKIPPED] + counts[NOT_APPLICABLE]),
-        "time": f"{doc['run']['duration_s']:.3f}",
-        "timestamp": clean(doc["run"]["started"]),
+        "tests": str(len(clauses)),
+        "failures": str(sum(_element(doc, c)[0] == "failure" for c in clauses)),
+        "errors": str(sum(_element(doc, c)[0] == "error" for c in clauses)),
+        "skipped": str(sum(_element(doc, c)[0] == "skipped" for c in clauses)),
+        "time": f"{timing['duration_s'] or 0.0:.3f}",
     })
+    if timing["started"]:
+        suite.set("timestamp", clean(timing["started"]))
     properties = ET.SubElement(suite, "properties")
     for name, value in _properties(doc):
         ET.SubElement(properties, "property", {"name": clean(name), "value": one_line(value)})
-    for clause in doc["clauses"]:
-        _testcase(suite, clause)
+    for clause in clauses:
+        _testcase(suite, doc, clause)
     stopped = interruption(doc)
     if stopped is not None:   # the counts alone would read as a clean run with skips
         ET.SubElement(suite, "system-err").text = stopped + "\n"
     ET.indent(suite)
     return ('<?xml version="1.0" encoding="UTF-8"?>\n'
             + ET.tostring(suite, encoding="unicode") + "\n")
+
+
+def _element(doc: dict[str, Any], clause: dict[str, Any]) -> tuple[str | None, str]:
+    """The child element a clause gets ("failure", "error", "skipped" or None for a plain
+    pass) and, for a skipped one, what its message starts with."""
+    outcome = clause["outcome"]
+    if outcome == PASS:
+        return None, ""
+    if outcome in (FAIL, ERROR):
+        if clause["gating"]:
+            return ("failure" if outcome == FAIL else "error"), ""
+        return "skipped", f"not gating ({_why_not_gating(doc, clause)})"
+    if outcome == KNOWN_DEVIATION:
+        reason = clause["expectation"]
+        return "skipped", f"known deviation ({reason})" if reason else "known deviation"
+    return "skipped", outcome   # not-applicable, skipped
+
+
+def _why_not_gating(doc: dict[str, Any], clause: dict[str, Any]) -> str:
+    if doc["gating"]["mode"] == "baseline":
+        return "not a regression: it did not pass in the baseline"
+    if clause["level"] == "MAY":
+        return "a MAY clause is optional: its failure never fails the run"
+    return f"a {clause['level']} failure fails the run only with --strict"
 
 
 def _properties(doc: dict[str, Any]) -> list[tuple[str, str]]:
@@ -56,6 +98,9 @@ def _properties(doc: dict[str, Any]) -> list[tuple[str, str]]:
         for key, value in sorted((doc[section] or {}).items()):
             pairs.append((f"{section}.{key}", value if isinstance(value, str)
                           else value_text(value)))
+    for key, value in sorted(run_facts(doc).items()):
+        if value is not None:
+            pairs.append((f"volatile.{key}", value if isinstance(value, str) else value_text(value)))
     gating = doc["gating"]
     pairs += [("gating.mode", gating["mode"]),
               ("gating.regressions", " ".join(gating["regressions"])),
@@ -67,35 +112,44 @@ def _properties(doc: dict[str, Any]) -> list[tuple[str, str]]:
     return pairs
 
 
-def _testcase(suite: ET.Element, clause: dict[str, Any]) -> None:
+def _testcase(suite: ET.Element, doc: dict[str, Any], clause: dict[str, Any]) -> None:
+    duration = clause_duration(doc, clause)
     case = ET.SubElement(suite, "testcase", {
         "classname": f"{SUITE_NAME}.{one_line(clause['group'])}",
         "name": one_line(f"{clause['id']} {clause['title']}"),
-        "time": f"{clause['duration_s']:.3f}",
+        "time": f"{duration or 0.0:.3f}",
     })
-    outcome = clause["outcome"]
-    detail = one_line(clause["detail"], MESSAGE_LIMIT)
-    if outcome in (FAIL, ERROR):
-        tag = "failure" if outcome == FAIL else "error"
-        child = ET.SubElement(case, tag, {"message": detail, "type": clause["level"]})
-        child.text = _body(clause)
-    elif outcome in (SKIPPED, NOT_APPLICABLE):
-        ET.SubElement(case, "skipped", {"message": f"{outcome}: {detail}" if detail else outcome})
-    elif outcome == KNOWN_DEVIATION:
-        expectation = clause["expectation"]
-        out = ET.SubElement(case, "system-out")
-        out.text = (f"known deviation: {one_line(expectation)}" if expectation
-                    else "known deviation") + "\n\n" + _body(clause)
+    tag, headline = _element(doc, clause)
+    if tag is None:   # a pass; one with a detail ("deviation no longer observed") shows it
+        if clause["detail"]:
+            ET.SubElement(case, "system-out").text = clean(clause_detail(doc, clause)) + "\n"
+        return
+    properties = ET.SubElement(case, "properties")
+    for name, value in (("outcome", clause["outcome"]), ("level", clause["level"]),
+                        ("gating", "fails the run" if clause["gating"] else "does not fail the run"),
+                        ("expectation", clause["expectation"])):
+        if value:
+            ET.SubElement(properties, "property", {"name": name, "value": one_line(value)})
+    detail = one_line(clause_detail(doc, clause))
+    if tag in ("failure", "error"):
+        child = ET.SubElement(case, tag, {"message": one_line(detail, MESSAGE_LIMIT),
+                                          "type": clause["level"] if tag == "failure" else "error"})
+        child.text = _body(doc, clause)
+        return
+    message = f"{headline}: {detail}" if detail else headline
+    ET.SubElement(case, "skipped", {"message": one_line(message, MESSAGE_LIMIT)})
+    ET.SubElement(case, "system-out").text = _body(doc, clause)
 
 
-def _body(clause: dict[str, Any]) -> str:
+def _body(doc: dict[str, Any], clause: dict[str, Any]) -> str:
     """The requirement, why it was not met, and the exchange that decided it, as text."""
     gating = "gating: fails the run" if clause["gating"] else "not gating"
-    lines = [f"{clause['level']} ({gating}), role {clause['role']}",
+    lines = [f"{clause['outcome']}: {clause['level']} ({gating}), role {clause['role']}",
              f"requirement: \"{clause['requirement']}\"",
              f"source: {clause['source']}",
-             f"detail: {clause['detail']}"]
+             f"detail: {clause_detail(doc, clause)}"]
     if clause["expectation"]:
         lines.append(f"expectation: {clause['expectation']}")
-    lines += ["", "exchange:"] + (exchange_lines(clause["exchange"]) or ["(no messages)"])
+    events = clause_events(doc, clause)
+    lines += ["", "exchange:"] + (exchange_lines(events) or ["(no messages)"])
     return clean("\n".join(lines)) + "\n"

@@ -12,7 +12,8 @@ import re
 from typing import Any
 from urllib.parse import quote
 
-from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
+from mavconform.reports.run_document import (OUTCOMES, PASS, clause_detail, outcome_counts,
+                                             run_facts)
 from mavconform.reports.text import (document_identity, interruption, one_line, seconds,
                                      verdict_headline)
 
@@ -33,12 +34,13 @@ def md(text: str, limit: int | None = None) -> str:
 
 def markdown_summary(doc: dict[str, Any]) -> str:
     """The run as a Markdown document (GitHub flavour), ending with a newline."""
-    summary, clauses = doc["summary"], doc["clauses"]
+    summary, clauses, timing = doc["summary"], doc["clauses"], run_facts(doc)
     out = [f"## {verdict_headline(summary['verdict'])}: {md(doc['run']['target'])} "
            f"({md(document_identity(doc))}), "
            f"{md(doc['tool']['name'])} {md(doc['tool']['version'])}",
            "",
-           f"Started {md(doc['run']['started'])}, took {seconds(doc['run']['duration_s'])}; "
+           f"Started {md(timing['started'] or 'at a time not recorded')}, took "
+           f"{'?' if timing['duration_s'] is None else seconds(timing['duration_s'])}; "
            f"gating mode {md(doc['gating']['mode'])}: {summary['gating_failures']} gating "
            f"failure{'' if summary['gating_failures'] == 1 else 's'}.",
            ""]
@@ -66,7 +68,7 @@ def markdown_summary(doc: dict[str, Any]) -> str:
             gating = " (gating)" if clause["gating"] else ""
             out.append(f"| {md(clause['id'])} | {md(clause['level'])} | "
                        f"{OUTCOME_ICONS[clause['outcome']]} {clause['outcome']}{gating} | "
-                       f"{md(clause['title'])} | {md(clause['detail'], DETAIL_LIMIT)} |")
+                       f"{md(clause['title'])} | {md(clause_detail(doc, clause), DETAIL_LIMIT)} |")
 
     gating = doc["gating"]
     titles = {c["id"]: c["title"] for c in clauses}

@@ -1,32 +1,51 @@
-"""The run document ("mavconform-run/1"): what a conformance run found, as plain JSON.
+"""The run document ("mavconform-run/2"): what a conformance run found, as plain JSON.
 
 The runner builds it; every report is a pure function of it. `load_run` checks the shape
 once, here, so the writers can index it without guarding each key, and a bad RUN.json is
 a one-line `UsageError` naming the file and the JSON path, never a traceback from a writer.
 `dump_run` is canonical (sorted keys, fixed indent) so that two runs diff cleanly.
 
+Two runs of the same target differ only in one top-level section, `volatile`: every value
+that changes from run to run without the target behaving differently (when it started, how
+long things took, when each message came, the target's ephemeral address, numbers measured
+off the clock) lives there and nowhere else, so `jq 'del(.volatile)'` on two run.json files
+leaves the behaviour to compare. A measured number inside a detail or a note is written
+`<name>` in the text and its value is in the volatile section; renderers read times and
+texts through `clause_events`, `clause_detail`, `clause_duration` and `run_facts`, which
+put them back together, never through the fields directly.
+
 Shape (keys the writers rely on; objects may carry more keys, which are kept):
 
-    format    "mavconform-run/1"
+    format    "mavconform-run/2"
     tool      {name, version}
-    run       {target, started, duration_s, ...scalars: seed, time_scale, strict, ...,
+    run       {target, ...scalars: seed, time_scale, strict, ...,
                [interrupted: bool, interrupted_at: clause id or phase, interrupted_by: SIGTERM]}
-    identity  {system, component, [type, autopilot, mavlink_version, address]} or null
+    identity  {system, component, [type, autopilot, mavlink_version, ...]} or null
     summary   {total, <one count per outcome>, gating_failures, verdict: pass|fail|interrupted}
     gating    {mode: strict|default|baseline, regressions: [id], fixed: [id]}
     restore   {status: restored|unchanged|failed|skipped, detail}
     capture   file name of the MCAP capture, or null
     clauses   [{id, group, level, role, title, source, requirement, outcome, gating,
-                detail, expectation, duration_s,
-                exchange: [{t, dir: tx|rx|note, peer, msg, fields: {name: scalar}}]}]
+                detail, expectation, exchange: [{dir: tx|rx|note, peer, msg, fields}]}]
+    volatile  {started, duration_s, forced_wait_s (or null), address (the target's, or null),
+               clauses: {ID: {duration_s, events: [t, ...],      one t per exchange event:
+                                                                 s from the clause's start
+                              [detail: {name: text}],            the detail's <name>s
+                              [notes: {"INDEX": {name: text}}]}}} a note event's <name>s
 
 The summary counts must agree with the clauses, so no report shows two different totals,
 and a run marked interrupted cannot have the verdict "pass" (what it did not reach is not
-known to pass).
+known to pass). A volatile key found outside `volatile` is refused, so it cannot creep back.
+
+The older "mavconform-run/1" kept the times in place (run.started, clauses[].duration_s,
+exchange[].t, ...). `load_run` still reads it and moves them into `volatile` (nothing is
+lost), so an old run.json serves as --baseline and `report render` re-renders it in the
+current format; `check_run`, for documents built in memory, takes the current format only.
 """
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import re
@@ -35,7 +54,8 @@ from typing import Any, NoReturn
 
 from mavconform.reference_impl.errors import UsageError
 
-FORMAT = "mavconform-run/1"
+FORMAT = "mavconform-run/2"
+FORMAT_1 = "mavconform-run/1"   # times in place; load_run upgrades it
 
 PASS = "pass"
 FAIL = "fail"
@@ -55,14 +75,20 @@ TX, RX, NOTE = "tx", "rx", "note"  # tester sent, tester received from the targe
 DIRECTIONS = (TX, RX, NOTE)
 
 # run keys every writer shows by name; the rest of `run` is shown as it comes.
-RUN_REQUIRED = {"target": ("string",), "started": ("string",), "duration_s": ("number",)}
+RUN_REQUIRED = {"target": ("string",)}
 RUN_KNOWN = {"seed": ("integer", "null"), "time_scale": ("number",), "strict": ("bool",),
              "clauses": ("string",), "expectations": ("string", "null"),
-             "baseline": ("string", "null"), "forced_wait_s": ("number", "null"),
+             "baseline": ("string", "null"),
              "interrupted": ("bool",), "interrupted_at": ("string", "null"),
              "interrupted_by": ("string", "null")}
 IDENTITY_KNOWN = {"type": ("integer",), "autopilot": ("integer",),
-                  "mavlink_version": ("integer",), "address": ("string", "null")}
+                  "mavlink_version": ("integer",)}
+VOLATILE_KNOWN = {"started": ("string",), "duration_s": ("number",),
+                  "forced_wait_s": ("number", "null"), "address": ("string", "null")}
+# Where format 1 kept the volatile values (and where format 2 refuses them).
+MOVED_RUN = ("started", "duration_s", "forced_wait_s")
+MOVED_IDENTITY = ("address",)
+PLACEHOLDER = re.compile(r"<([A-Za-z_][A-Za-z0-9_]*)>")   # a measured number in a text
 SCALAR = ("string", "number", "bool", "null")
 
 _SURROGATE = re.compile("[\ud800-\udfff]")
@@ -84,6 +110,9 @@ def load_run(path: str | Path) -> dict[str, Any]:
         _fail(source, "", f"line {error.lineno} column {error.colno}: invalid JSON: {error.msg}")
     except RecursionError:
         _fail(source, "", "invalid JSON: nested too deeply")
+    if isinstance(document, dict) and document.get("format") == FORMAT_1:
+        _Checker(source, FORMAT_1).document(document)
+        document = upgrade_run(document)
     return check_run(document, source)
 
 
@@ -91,6 +120,23 @@ def check_run(doc: Any, source: str = "run document") -> dict[str, Any]:
     """`doc` itself if it has the shape the writers rely on; else a one-line `UsageError`
     "SOURCE: json.path: problem". Also for a document built in memory by the runner."""
     _Checker(source).document(doc)
+    return doc
+
+
+def upgrade_run(doc: dict[str, Any]) -> dict[str, Any]:
+    """A checked "mavconform-run/1" document in the current format: a new document, its
+    times, durations and address moved into `volatile` (its texts stay as they were)."""
+    doc = copy.deepcopy(doc)   # the caller's document is not changed
+    run, identity = doc["run"], doc["identity"]
+    volatile: dict[str, Any] = {key: run.pop(key, None) for key in MOVED_RUN}
+    volatile["address"] = identity.pop("address", None) if identity is not None else None
+    volatile["clauses"] = {}
+    for clause in doc["clauses"]:   # new dicts: two clauses may share an event object
+        volatile["clauses"][clause["id"]] = {"duration_s": clause.pop("duration_s"),
+                                             "events": [e["t"] for e in clause["exchange"]]}
+        clause["exchange"] = [{k: v for k, v in e.items() if k != "t"} for e in clause["exchange"]]
+    doc["volatile"] = volatile
+    doc["format"] = FORMAT
     return doc
 
 
@@ -170,8 +216,10 @@ def _short(value: str, limit: int = 40) -> str:
 class _Checker:
     """Typed access to the document; every problem names its JSON path."""
 
-    def __init__(self, source: str) -> None:
+    def __init__(self, source: str, format_: str = FORMAT) -> None:
         self.source = source
+        self.format = format_
+        self.old = format_ == FORMAT_1   # times in place, no `volatile`
 
     def fail(self, path: str, problem: str) -> NoReturn:
         _fail(self.source, path, problem)
@@ -226,9 +274,12 @@ class _Checker:
             self.fail("", f"expected a JSON object, found {_describe(doc)}")
         if "format" not in doc:
             self.fail("", f"missing 'format' (expected {FORMAT!r}: not a mavconform run?)")
-        if (found := doc["format"]) != FORMAT:
+        if (found := doc["format"]) != self.format:
+            if found == FORMAT_1:
+                self.fail("format", f"{FORMAT_1!r} is the older layout, with its times in place: "
+                                    "read it with load_run, which upgrades it")
             shown = _short(found) if isinstance(found, str) else _describe(found)
-            self.fail("format", f"expected {FORMAT!r}, found {shown}")
+            self.fail("format", f"expected {self.format!r}, found {shown}")
         try:
             self.non_finite(doc, "")
         except RecursionError:
@@ -256,25 +307,42 @@ class _Checker:
                                                   f"clauses[{first_index[clause_id]}]")
             first_index[clause_id] = index
         self.summary(self.key(doc, "summary", "", "object"), clauses)
+        if not self.old:
+            self.volatile(self.key(doc, "volatile", "", "object"), clauses)
         if doc["run"].get("interrupted") and doc["summary"]["verdict"] == PASS:
             self.fail("summary.verdict", "'pass', but run.interrupted is true: an interrupted "
                                          "run is not known to pass")
 
+    def moved(self, obj: dict, keys: tuple[str, ...], path: str) -> None:
+        """Format 2 keeps these in `volatile`: here they would make two runs differ."""
+        for key in keys:
+            if key in obj:
+                self.fail(_join(path, key), f"belongs in the volatile section, not here ({FORMAT})")
+
     def run(self, run: dict) -> None:
         for key, kinds in RUN_REQUIRED.items():
             self.key(run, key, "run", *kinds)
+        known = RUN_KNOWN
+        if self.old:
+            self.key(run, "started", "run", "string")
+            self.key(run, "duration_s", "run", "number")
+            self.duration(run, "run")
+            known = {**RUN_KNOWN, **VOLATILE_KNOWN}
+        else:
+            self.moved(run, MOVED_RUN, "run")
         for key, value in run.items():
-            self.value(value, f"run.{key}", RUN_KNOWN.get(key, SCALAR))
-        if run["duration_s"] < 0:
-            self.fail("run.duration_s", f"negative duration {run['duration_s']}")
+            self.value(value, f"run.{key}", known.get(key, SCALAR))
 
     def identity(self, identity: dict | None) -> None:
         if identity is None:
             return
         self.key(identity, "system", "identity", "integer")
         self.key(identity, "component", "identity", "integer")
+        if not self.old:
+            self.moved(identity, MOVED_IDENTITY, "identity")
+        known = {**IDENTITY_KNOWN, "address": ("string", "null")} if self.old else IDENTITY_KNOWN
         for key, value in identity.items():
-            self.value(value, f"identity.{key}", IDENTITY_KNOWN.get(key, SCALAR))
+            self.value(value, f"identity.{key}", known.get(key, SCALAR))
 
     def clause(self, clause: Any, path: str) -> str:
         self.value(clause, path, ("object",))
@@ -287,15 +355,21 @@ class _Checker:
         self.choice(clause, "outcome", path, OUTCOMES)
         self.key(clause, "gating", path, "bool")
         self.key(clause, "expectation", path, "string", "null")
-        if self.key(clause, "duration_s", path, "number") < 0:
-            self.fail(f"{path}.duration_s", f"negative duration {clause['duration_s']}")
+        if self.old:
+            self.key(clause, "duration_s", path, "number")
+            self.duration(clause, path)
+        else:
+            self.moved(clause, ("duration_s",), path)
         for index, event in enumerate(self.key(clause, "exchange", path, "array")):
             self.event(event, f"{path}.exchange[{index}]")
         return clause_id
 
     def event(self, event: Any, path: str) -> None:
         self.value(event, path, ("object",))
-        self.key(event, "t", path, "number")
+        if self.old:
+            self.key(event, "t", path, "number")
+        else:
+            self.moved(event, ("t",), path)
         self.choice(event, "dir", path, DIRECTIONS)
         if not self.key(event, "peer", path, "string"):
             self.fail(f"{path}.peer", "empty peer name")
@@ -308,6 +382,47 @@ class _Checker:
             else:
                 self.value(value, field_path, SCALAR)
 
+    def duration(self, obj: dict, path: str) -> None:
+        if obj["duration_s"] < 0:
+            self.fail(f"{path}.duration_s", f"negative duration {obj['duration_s']}")
+
+    def volatile(self, volatile: dict, clauses: list[dict]) -> None:
+        for key, kinds in VOLATILE_KNOWN.items():
+            (self.key if key in ("started", "duration_s") else self.optional)(
+                volatile, key, "volatile", *kinds)
+        self.duration(volatile, "volatile")
+        per_clause = self.key(volatile, "clauses", "volatile", "object")
+        by_id = {clause["id"]: clause for clause in clauses}
+        for clause_id in per_clause:
+            if clause_id not in by_id:
+                self.fail(f"volatile.clauses.{clause_id}", "no clause has this id")
+        for clause_id, clause in by_id.items():
+            path = f"volatile.clauses.{clause_id}"
+            if clause_id not in per_clause:
+                self.fail("volatile.clauses", f"missing {clause_id!r}")
+            entry = self.value(per_clause[clause_id], path, ("object",))
+            self.key(entry, "duration_s", path, "number")
+            self.duration(entry, path)
+            times = self.key(entry, "events", path, "array")
+            for index, t in enumerate(times):
+                self.value(t, f"{path}.events[{index}]", ("number",))
+            if len(times) != len(clause["exchange"]):
+                self.fail(f"{path}.events", f"{len(times)} times for "
+                                            f"{len(clause['exchange'])} exchange events")
+            self.values(entry.get("detail", {}), f"{path}.detail")
+            for index, values in self.key(entry, "notes", path, "object").items() \
+                    if "notes" in entry else ():
+                if not index.isdigit() or int(index) >= len(clause["exchange"]) \
+                        or clause["exchange"][int(index)]["dir"] != NOTE:
+                    self.fail(f"{path}.notes.{index}", "not the index of a note in the exchange")
+                self.values(values, f"{path}.notes.{index}")
+
+    def values(self, values: Any, path: str) -> None:
+        """Measured numbers of a text, by the <name> that stands for each."""
+        self.value(values, path, ("object",))
+        for name, text in values.items():
+            self.value(text, f"{path}.{name}", ("string",))
+
     def summary(self, summary: dict, clauses: list[dict]) -> None:
         if (total := self.count(summary, "total", "summary")) != len(clauses):
             self.fail("summary.total", f"{total}, but there are {len(clauses)} clauses")
@@ -319,3 +434,57 @@ class _Checker:
         if (stated := self.count(summary, "gating_failures", "summary")) != gating:
             self.fail("summary.gating_failures", f"{stated}, but {gating} clauses are gating")
         self.choice(summary, "verdict", "summary", VERDICTS)
+
+
+# --- volatile values, for the renderers ------------------------------------------------------
+
+def fill(text: str, values: dict[str, str]) -> str:
+    """`text` with each `<name>` that `values` has replaced by its measured value."""
+    if not values:
+        return text
+    return PLACEHOLDER.sub(lambda m: values.get(m.group(1), m.group(0)), text)
+
+
+def _volatile_clause(doc: dict[str, Any], clause: dict[str, Any]) -> dict[str, Any]:
+    return (doc.get("volatile") or {}).get("clauses", {}).get(clause["id"], {})
+
+
+def clause_events(doc: dict[str, Any], clause: dict[str, Any]) -> list[dict[str, Any]]:
+    """The clause's exchange events, in order, each a new dict with its time `t` (s from
+    the clause's start) and, for a note, its measured numbers back in its text.
+
+    Renderers call this rather than reading `exchange`, which has no times (they are in
+    `volatile`). A document without them (format 1 kept them in place) works too."""
+    entry = _volatile_clause(doc, clause)
+    times = entry.get("events", [])
+    notes = entry.get("notes", {})
+    events = []
+    for index, event in enumerate(clause.get("exchange", [])):
+        event = dict(event)
+        if index < len(times):
+            event["t"] = times[index]
+        event.setdefault("t", 0.0)
+        if str(index) in notes:
+            event["msg"] = fill(event["msg"], notes[str(index)])
+        events.append(event)
+    return events
+
+
+def clause_detail(doc: dict[str, Any], clause: dict[str, Any]) -> str:
+    """The clause's detail as a person reads it: its measured numbers put back."""
+    return fill(clause["detail"], _volatile_clause(doc, clause).get("detail", {}))
+
+
+def clause_duration(doc: dict[str, Any], clause: dict[str, Any]) -> float | None:
+    """How long the clause took, in seconds; None if the document does not say."""
+    return _volatile_clause(doc, clause).get("duration_s", clause.get("duration_s"))
+
+
+def run_facts(doc: dict[str, Any]) -> dict[str, Any]:
+    """The run's volatile facts, for display: started (UTC, ISO 8601), duration_s,
+    forced_wait_s and the target's address (each None if the document does not say)."""
+    volatile = doc.get("volatile")
+    if volatile is None:   # format 1: in place
+        run, identity = doc.get("run", {}), doc.get("identity") or {}
+        volatile = {**{key: run.get(key) for key in MOVED_RUN}, "address": identity.get("address")}
+    return {key: volatile.get(key) for key in ("started", "duration_s", "forced_wait_s", "address")}

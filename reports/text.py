@@ -13,6 +13,7 @@ import re
 from typing import Any
 
 from mavconform.reports.run_document import NOTE, RX, TX
+from mavconform.reports.run_document import run_facts as volatile_facts
 
 # C0 controls but tab and newline, DEL, C1 controls, bidi embeddings/overrides/isolates,
 # noncharacters U+FFFE/U+FFFF; lone surrogates are replaced rather than dropped.
@@ -80,7 +81,8 @@ def exchange_start(exchange: list[dict[str, Any]]) -> float:
 
 
 def exchange_lines(exchange: list[dict[str, Any]], limit: int = 300) -> list[str]:
-    """The exchange as text, one event a line: "+0.001 s  target → tester  MISSION_ACK ..."."""
+    """The exchange as text, one event a line: "+0.001 s  target → tester  MISSION_ACK ...".
+    `exchange` is events with their times, as `run_document.clause_events` gives them."""
     t0 = exchange_start(exchange)
     lines = []
     for event in exchange[:limit]:
@@ -92,7 +94,8 @@ def exchange_lines(exchange: list[dict[str, Any]], limit: int = 300) -> list[str
     return lines
 
 
-def identity_text(identity: dict[str, Any] | None, missing: str = "no answer from the target") -> str:
+def identity_text(identity: dict[str, Any] | None, missing: str = "no answer from the target",
+                  address: str | None = None) -> str:
     """"system 1 component 1, type 2, autopilot 4, MAVLink 2, at 127.0.0.1:40001"."""
     if identity is None:
         return missing
@@ -101,15 +104,16 @@ def identity_text(identity: dict[str, Any] | None, missing: str = "no answer fro
                       ("mavlink_version", "MAVLink")):
         if identity.get(key) is not None:
             parts.append(f"{word} {identity[key]}")
-    if identity.get("address"):
-        parts.append(f"at {one_line(str(identity['address']))}")
+    address = address or identity.get("address")   # a document's is in its volatile section
+    if address:
+        parts.append(f"at {one_line(str(address))}")
     return ", ".join(parts)
 
 
 def document_identity(doc: dict[str, Any]) -> str:
     """The target's identity as the document knows it (a fuzz campaign does not record it)."""
     return identity_text(doc["identity"], "not recorded by a fuzz campaign" if "fuzz" in doc
-                         else "no answer from the target")
+                         else "no answer from the target", volatile_facts(doc)["address"])
 
 
 def seconds(value: float) -> str:
@@ -138,22 +142,25 @@ def interruption(doc: dict[str, Any]) -> str | None:
 
 def run_facts(doc: dict[str, Any]) -> list[tuple[str, str]]:
     """(label, value) pairs describing the run, known keys first, for the report headers."""
-    run = doc["run"]
+    run, timing = doc["run"], volatile_facts(doc)
     facts = [("tool", f"{doc['tool']['name']} {doc['tool']['version']}"),
              ("target", run["target"]), ("identity", document_identity(doc)),
-             ("started", run["started"]), ("duration", seconds(run["duration_s"]))]
+             ("started", timing["started"] or "not recorded"),
+             ("duration", "not recorded" if timing["duration_s"] is None
+              else seconds(timing["duration_s"]))]
     labels = {"seed": "seed", "time_scale": "time scale", "strict": "strict",
               "clauses": "clauses selected", "expectations": "expectations file",
-              "baseline": "baseline", "forced_wait_s": "forced waits"}
-    shown_apart = ("target", "started", "duration_s", "interrupted", "interrupted_at", "interrupted_by")
-    extra = [key for key in labels if key in run] + sorted(
-        key for key in run if key not in labels and key not in shown_apart)
-    for key in extra:
-        value = run[key]
-        if value is None:
-            shown = "none"
-        elif key == "forced_wait_s":
+              "baseline": "baseline"}
+    shown_apart = ("target", "interrupted", "interrupted_at", "interrupted_by")
+    extra = sorted(key for key in run if key not in labels and key not in shown_apart)
+    for key in [key for key in labels if key in run] + ["forced waits"] + extra:
+        value = timing["forced_wait_s"] if key == "forced waits" else run[key]
+        if key == "forced waits":
+            if value is None:
+                continue
             shown = seconds(value)
+        elif value is None:
+            shown = "none"
         else:
             shown = value if isinstance(value, str) else value_text(value)
         facts.append((labels.get(key, key), shown))

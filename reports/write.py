@@ -28,7 +28,7 @@ def write_reports(doc: dict[str, Any], directory: str | Path, *,
     """
     check_run(doc)
     texts = {"json": dump_run(doc), "junit": junit_xml(doc), "markdown": markdown_summary(doc),
-             "html": html_report(doc)}
+             "html": html_report(doc, folder=directory)}
     folder = Path(directory)
     try:
         folder.mkdir(parents=True, exist_ok=True)

@@ -9,7 +9,6 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
-import sysconfig
 import textwrap
 import venv
 import zipfile
@@ -85,8 +84,9 @@ def test_the_wheel_in_a_fresh_venv_beside_a_project_with_its_own_fuzz_and_report
     assert installed.returncode == 0, installed.stderr
     assert {p.name for p in site.iterdir()} == {"mavconform", "mavconform-0.1.0.dist-info"}
     # The dependencies (pytest, hypothesis, pymavlink, mcap) come from this interpreter's
-    # site-packages: a path line, so its .pth files (our editable install) are not run.
-    (site / "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    # site-packages folders: path lines, so their .pth files (our editable install) are not run.
+    (site / "deps.pth").write_text("".join(f"{p}\n" for p in sys.path if Path(p).name in ("site-packages",
+                                                                                       "dist-packages")))
 
     project = tmp_path / "project"
     for package, text in [("fuzz", "OWNER = 'the user'\n"), ("reports", "OWNER = 'the user'\n")]:

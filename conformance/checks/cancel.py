@@ -15,6 +15,7 @@ from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, ack, msg, request
+from ..harness.measured import Measured
 from ..harness.sentinel import answers_before_sentinel, brief
 from ..harness.tester import Tester
 from ..outcome import ClauseFailed, PreconditionFailed
@@ -113,9 +114,11 @@ def cancel_stops_upload_requests(s: Session) -> None:
     obs = cancelled_upload(s)
     if obs.late_requests:
         dt, seq = obs.late_requests[0]
-        raise ClauseFailed(f"after MISSION_ACK OPERATION_CANCELLED the vehicle kept requesting: "
-                           f"{len(obs.late_requests)} request(s) in {obs.window * s.scale:g} s, "
-                           f"the first for item {seq} after {dt:.3f} s; expected none")
+        raise ClauseFailed(Measured(
+            f"after MISSION_ACK OPERATION_CANCELLED the vehicle kept requesting: "
+            f"{len(obs.late_requests)} request(s) in <window> s, "
+            f"the first for item {seq} after <after> s; expected none",
+            window=f"{obs.window * s.scale:g}", after=f"{dt:.3f}"))   # the window follows its retries
 
 
 @check("MIS.CAN.02")

@@ -9,6 +9,7 @@ from mavconform.reference_impl.mission.items import MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import msg
+from ..harness.measured import Measured
 from ..harness.tester import Tester
 from ..outcome import ClauseFailed, NotApplicable, PreconditionFailed
 from ..session import Session
@@ -152,5 +153,6 @@ def mission_current_streamed(s: Session) -> None:
     median = gaps[len(gaps) // 2]   # the target's own period: --time-scale only widens the bound
     high *= s.scale
     if not low <= median <= high:
-        raise ClauseFailed(f"MISSION_CURRENT came every {median:.2f} s (median of {len(gaps)} "
-                           f"gaps); expected about 1 s (accepted: {low:g}-{high:g} s)")
+        raise ClauseFailed(Measured(f"MISSION_CURRENT came every <median> s (median of {len(gaps)} "
+                                    f"gaps); expected about 1 s (accepted: {low:g}-{high:g} s)",
+                                    median=f"{median:.2f}"))

@@ -16,6 +16,7 @@ from mavconform.reference_impl.wire.frame import Frame
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, REQUESTS, ack, msg
+from ..harness.measured import Measured
 from ..harness.tester import Tester
 from ..outcome import ClauseFailed, NotApplicable, PreconditionFailed
 from ..session import Session
@@ -199,7 +200,7 @@ def heartbeat_is_regular(s: Session) -> None:
 
     t.wait_until(lambda: len(heartbeats()) >= 2, max(0.0, closes - t.now()) / t.scale)
     seen = [round(at - opened, 3) for at in heartbeats() if at <= closes]
-    t.note(f"HEARTBEATs at {seen} s into a {HEARTBEAT_WINDOW * t.scale:g} s window")
+    t.note(Measured(f"HEARTBEATs at <at> s into a {HEARTBEAT_WINDOW * t.scale:g} s window", at=str(seen)))
     if len(seen) < 2:
         raise ClauseFailed(f"{len(seen)} HEARTBEAT(s) in {HEARTBEAT_WINDOW * t.scale:g} s; expected at least 2 "
                            "(a component broadcasts its HEARTBEAT regularly, nominally at 1 Hz)")
@@ -239,7 +240,8 @@ def _damaged_frames(t: Tester) -> list[tuple[str, bytes]]:
 def _send_raw(t: Tester, data: bytes, what: str) -> None:
     """`data` to the target as one datagram, where the tester's messages go."""
     t.node.endpoint.send_raw(data, t.target)
-    t.note(f"raw datagram: {what} ({len(data)} bytes {data[:12].hex()}...)")
+    # the bytes hold the tester's packet sequence number, which depends on the run so far
+    t.note(Measured(f"raw datagram: {what} ({len(data)} bytes <bytes>...)", bytes=data[:12].hex()))
     t.driver.run_until(lambda: True, timeout=0.0)
 
 

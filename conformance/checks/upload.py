@@ -10,6 +10,7 @@ from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 from ..harness import plans, procedures
 from ..harness.match import REQUESTS, ack, msg, request
+from ..harness.measured import Measured
 from ..harness.stored_form import StoredForm
 from ..harness.tester import Tester
 from ..outcome import ClauseFailed, NotApplicable, PreconditionFailed, beyond_the_clause
@@ -194,9 +195,10 @@ def item_timeout_is_about_250ms(s: Session) -> None:
     gaps = len(obs.repeated) - 1
     low, high = ITEM_TIMEOUT / 2, ITEM_TIMEOUT * ABOUT * s.scale
     if not low <= median <= high:
-        raise ClauseFailed(f"re-requests came every {median * 1000:.0f} ms (median of "
-                           f"{gaps}); expected about {ITEM_TIMEOUT * 1000:.0f} ms "
-                           f"(accepted: {low * 1000:.0f}-{high * 1000:.0f} ms)")
+        raise ClauseFailed(Measured(f"re-requests came every <median> ms (median of "
+                                    f"{gaps}); expected about {ITEM_TIMEOUT * 1000:.0f} ms "
+                                    f"(accepted: {low * 1000:.0f}-{high * 1000:.0f} ms)",
+                                    median=f"{median * 1000:.0f}"))
 
 
 @check("MIS.UP.08")

@@ -19,6 +19,7 @@ from mavconform.reference_impl.wire.frame import Frame
 from ..outcome import ClauseFailed, TargetUnresponsive
 from .exchange import Exchange, message_fields, relevant
 from .match import Match
+from .measured import Measured
 from .stored_form import SPEC_FORM, StoredForm
 from .tester_node import TesterNode
 
@@ -124,8 +125,10 @@ class Tester:
         seen = self.collect(match, for_, stop_at_first=True)
         if seen:
             t, frame = seen[0]
-            raise ClauseFailed(f"expected no {match} for {for_ * self.scale:g} s; got "
-                               f"{_describe(frame)} after {t:.3f} s")
+            # the window may follow the target's measured retry interval: both are measured
+            raise ClauseFailed(Measured(f"expected no {match} for <window> s; got "
+                                        f"{_describe(frame)} after <after> s",
+                                        window=f"{for_ * self.scale:g}", after=f"{t:.3f}"))
 
     def collect(self, match: Match, for_: float, *, stop_at_first: bool = False,
                 stop: Match | None = None, quiet: float | None = None) -> list[tuple[float, Frame]]:
@@ -205,7 +208,8 @@ class Tester:
         if heard is None or self.now() - heard > LIVENESS * self.scale:
             raise TargetUnresponsive(
                 "the target sent nothing at all" if heard is None
-                else f"the target has sent nothing for {self.now() - heard:.1f} s")
+                else Measured("the target has sent nothing for <silent> s",
+                              silent=f"{self.now() - heard:.1f}"))
 
     def last_seen(self) -> str:
         """The last mission message received since the floor, for a verdict's detail."""

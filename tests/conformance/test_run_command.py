@@ -32,7 +32,7 @@ def test_run_against_builtin_writes_all_five_reports(tmp_path, capsys) -> None:
     doc = json.loads((tmp_path / "run.json").read_text())
     assert [c["id"] for c in doc["clauses"]] == ["MIS.UP.01", "MIS.UP.02", "MIS.UP.03", "MIS.DN.01"]
     assert all(c["outcome"] == "pass" for c in doc["clauses"])
-    assert doc["identity"]["system"] == 1 and doc["identity"]["address"].startswith("127.0.0.1:")
+    assert doc["identity"]["system"] == 1 and doc["volatile"]["address"].startswith("127.0.0.1:")
     assert "verdict: PASS" in out and "PASS  MIS.UP.01" in out
 
 

@@ -258,6 +258,12 @@ def test_a_protocol_finding_replays_with_a_marker_per_step(tmp_path, capsys) -> 
                  "--seed", "1") == 1
     (case_path,) = sorted((tmp_path / "found").glob("*.json"))
     steps = load_case(case_path).steps
+    from mavconform.reports.run_document import clause_events
+    doc = load_run(tmp_path / "rep" / "fuzz.json")
+    row = next(c for c in doc["clauses"] if c["outcome"] == "fail")
+    events = clause_events(doc, row)
+    assert {(e["dir"], e["peer"]) for e in events if e["dir"] != "note"} == {("tx", "tester"), ("rx", "tester")}
+    assert f"step 0: {steps[0]['op']}" in [e["msg"] for e in events if e["dir"] == "note"]
     capture = tmp_path / "again.mcap"
     assert main(["fuzz", "--replay", str(case_path), "--capture", str(capture)]) == 1
     with open(capture, "rb") as f:

@@ -228,7 +228,7 @@ def test_a_signal_python_drops_still_ends_the_campaign(tmp_path, capsys, monkeyp
     assert "interrupted by SIGTERM during search" in out and "Exception ignored" not in err
     doc = _interrupted_doc(tmp_path)
     assert doc["summary"]["verdict"] == "interrupted"
-    assert doc["run"]["duration_s"] < 15, "it stopped after that example, not at the end of its budget"
+    assert doc["volatile"]["duration_s"] < 15, "it stopped after that example, not at the end of its budget"
 
 
 @pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),

@@ -1,4 +1,7 @@
-"""A realistic run document: every outcome, both testers, notes, and hostile target text."""
+"""A realistic run document: every outcome, both testers, notes, and hostile target text.
+
+It is written as format 1 once did (times in place) and turned into the current format by
+`upgrade_run`, with one measured number in a detail and in a note, as a run records them."""
 
 from __future__ import annotations
 
@@ -46,8 +49,8 @@ FAILED_UPLOAD = [
 FAILED_ARROWS = 5
 
 
-def run_document() -> dict[str, Any]:
-    """A fresh copy each call (tests may mutate it)."""
+def run_document_1() -> dict[str, Any]:
+    """The sample in the older format ("mavconform-run/1"), a fresh copy each call."""
     clauses = [
         clause("MIS.UP.01", "pass", UPLOAD_OK),
         clause("MIS.UP.07", "fail", FAILED_UPLOAD, gating=True,
@@ -79,3 +82,20 @@ def run_document() -> dict[str, Any]:
         "clauses": clauses,
     }
     return copy.deepcopy(doc)
+
+
+MEASURED_DETAIL = "got MISSION_REQUEST_INT{seq=0} after <delay> s; expected none"
+
+
+def run_document() -> dict[str, Any]:
+    """The sample in the current format, a fresh copy each call (tests may mutate it). The
+    error clause's detail and the failed upload's last note carry a measured number."""
+    from mavconform.reports.run_document import upgrade_run
+    doc = upgrade_run(run_document_1())
+    error = doc["clauses"][5]
+    error["detail"] = MEASURED_DETAIL
+    doc["volatile"]["clauses"][error["id"]]["detail"] = {"delay": "0.253"}
+    failed = doc["clauses"][1]
+    failed["exchange"][6]["msg"] = "expect MISSION_REQUEST_INT seq=1 within 1.5 s: nothing in <waited> s"
+    doc["volatile"]["clauses"][failed["id"]]["notes"] = {"6": {"waited": "1.5002"}}
+    return doc

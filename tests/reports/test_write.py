@@ -26,7 +26,7 @@ def test_basename(doc, tmp_path):
     paths = write_reports(doc, tmp_path, basename="px4")
     assert sorted(p.name for p in paths.values()) == [
         "px4.html", "px4.json", "px4.junit.xml", "px4.md"]
-    assert json.loads(paths["json"].read_text(encoding="utf-8"))["format"] == "mavconform-run/1"
+    assert json.loads(paths["json"].read_text(encoding="utf-8"))["format"] == "mavconform-run/2"
 
 
 def test_a_folder_that_cannot_be_made_is_one_line(doc, tmp_path):
