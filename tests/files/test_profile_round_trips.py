@@ -28,7 +28,10 @@ from . import qgc_loader
 
 FIXTURES = sorted((Path(__file__).parent / "fixtures").glob("*.plan"))
 # Fixtures a profiled vehicle refuses as its autopilot does: PX4 v1.16.0 takes no terrain frame
-# (mavlink_mission.cpp parse_mavlink_mission_item: MAV_MISSION_UNSUPPORTED_FRAME).
+# (mavlink_mission.cpp parse_mavlink_mission_item: MAV_MISSION_UNSUPPORTED_FRAME), and QGC
+# offers that frame (AltitudeMode 4, TerrainFrame) only for ArduPilot. Its terrain-relative
+# mode for PX4 is AltitudeMode 3 (CalcAboveTerrain: an AMSL altitude in MAV_FRAME_GLOBAL),
+# which terrain_calc_above_terrain.plan carries and every profile takes.
 REFUSED = {("terrain_null_altitude", "px4"): MissionResult.UNSUPPORTED_FRAME}
 
 
