@@ -34,6 +34,32 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 def pytest_configure(config: pytest.Config) -> None:
     if config.getoption("--mavlink-target", default=None):
         _prepared(config)   # check every option before collection: a mistake is a usage error
+        _catch_sigterm()
+
+
+def _catch_sigterm() -> None:
+    """SIGTERM (CI cancel, `timeout`) as Ctrl-C: pytest then stops and tears the session
+    down, so the target's plans are put back and the reports written, marked interrupted."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def interrupt(signum: int, frame: object) -> None:
+        _STATE["signal"] = "SIGTERM"
+        raise KeyboardInterrupt
+    _STATE["previous_sigterm"] = signal.signal(signal.SIGTERM, interrupt)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if "previous_sigterm" in _STATE:
+        import signal
+        signal.signal(signal.SIGTERM, _STATE.pop("previous_sigterm"))
+
+
+def pytest_keyboard_interrupt(excinfo: pytest.ExceptionInfo) -> None:
+    if "prepared" in _STATE:
+        _STATE["interrupted_by"] = _STATE.get("signal", "SIGINT")
 
 
 def _prepared(config: pytest.Config):
@@ -114,10 +140,13 @@ def mavlink_session(request: pytest.FixtureRequest):
             pytest.fail(f"target unresponsive: {exc}", pytrace=False)
         snapshot = _snapshot(session)
         yield session
-        restore = _restore(session, snapshot) if snapshot is not None else {
-            "status": "skipped", "detail": "could not read the plans before the run"}
-        if p.report_dir is not None:
-            _write(p, session, results, restore, started, capture)
+        from .runner import InterruptGuard
+        with InterruptGuard() as guard:   # a second signal must not cut the restore short
+            guard.hold()
+            restore = _restore(session, snapshot) if snapshot is not None else {
+                "status": "skipped", "detail": "could not read the plans before the run"}
+            if p.report_dir is not None:
+                _write(p, session, results, restore, started, capture)
     finally:
         if capture is not None:
             capture.close()
@@ -130,10 +159,19 @@ def _write(p, session, results, restore, started, capture) -> None:
     from mavconform.reports.write import write_reports
 
     from . import document, gating
+    from .outcome import ClauseResult, Outcome
     from .runner import RunOutcome
+    interrupted_by = _STATE.get("interrupted_by")
+    decided = {r.clause_id for r in results}
+    not_run = [c.id for c in p.clauses if c.id not in decided]
+    if interrupted_by is not None:   # the clauses pytest never reached
+        results = results + [ClauseResult(cid, Outcome.SKIPPED, "not run: interrupted") for cid in not_run]
     run = RunOutcome(results, session.identity, restore,
                      (dt.datetime.now(dt.timezone.utc) - started).total_seconds(),
-                     sum(t.forced_wait for t in session.testers()))
+                     sum(t.forced_wait for t in session.testers()),
+                     interrupted=interrupted_by is not None,
+                     interrupted_at=(not_run[0] if not_run else "restore") if interrupted_by else None,
+                     interrupted_by=interrupted_by)
     gating.apply_expectations(run.results, p.expected)
     flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
     doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
