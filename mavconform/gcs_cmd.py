@@ -5,11 +5,14 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
-from typing import Iterator
+from typing import Any, Iterator
 
 from mavconform.reference_impl.files import Plan, check_writable, load_plan, plan_from_items, plan_types_in, save_plan
 from mavconform.reference_impl.files.from_vehicle import facts_from_gcs
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
+from mavconform.reference_impl.handover.control_client import ClientConfig, always
+from mavconform.reference_impl.handover.control_messages import DEFAULT_REQUEST_TIMEOUT, TIMEOUT_MAX, TIMEOUT_MIN
+from mavconform.reference_impl.handover.control_results import ControlResult, Decision, TakeoverRequested
 from mavconform.reference_impl.mission.adaptations import NAMED
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.mission.plan_upload import previous_plans, upload_plan
@@ -29,6 +32,8 @@ Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
 The vehicle is found by its HEARTBEAT, whose autopilot field also picks how the GCS adapts
 to it (ArduPilot: home at seq 0, non-terminating NACKs, ...; PX4: ...; anything else: the
 spec-exact GCS); --adapt fixes the choice. The adaptations that acted are printed at the end.
+`gcs control` asks for, releases or shares operator control of a vehicle that has it
+(`mavconform vehicle --operator-control`).
 Exit 0 when every operation succeeded, 1 when one failed or the target never answered, 2 for
 a usage mistake.
 """
@@ -64,25 +69,29 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                         "with --command) and wait for MISSION_CURRENT.")
     setcur.add_argument("seq", type=seq_number, metavar="SEQ", help="mission item number, 0..65535")
     setcur.add_argument("--command", action="store_true", help="use the command instead of the message")
-    for p in (up, down, clear, setcur):
+    control = _add_control_parser(ops)
+    for p in (up, down, clear, setcur, control):
         p.add_argument("--target", required=True, metavar="URI", help=FORMS)
         p.add_argument("--system", type=mavlink_id, default=255, help="our system id (default 255)")
         p.add_argument("--heartbeat-timeout", type=seconds_up_to(3600), default=5.0, metavar="S",
                        help="how long to wait for the target's HEARTBEAT (default 5)")
         p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
                        help="stretch every protocol timeout by X for slow links (default 1)")
+        p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
+        p.set_defaults(run=run)
+    for p in (up, down, clear, setcur):
         p.add_argument("--float", action="store_true",
                        help="download with MISSION_REQUEST / MISSION_ITEM instead of the _INT "
                             "messages (uploads always answer in the form the vehicle asks for)")
-        p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
         p.add_argument("--adapt", choices=("auto", *NAMED), default="auto",
                        help="how to adapt to the vehicle: auto (from its HEARTBEAT autopilot, the "
                             "default), none (spec-exact), or the set for px4 / ardupilot")
-        p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     target = parse_udp_uri(args.target, option="--target")
+    if args.operation == "control":
+        return _control(args, target)
     # bad files and paths fail before any network I/O
     plan = load_plan(args.file) if args.operation == "upload" else None
     for note in plan.notes if plan is not None else ():
@@ -91,13 +100,9 @@ def run(args: argparse.Namespace) -> int:
     if args.operation == "download":
         check_writable(args.file)
     with _session(args, target) as session:
-        try:
-            session.wait_for_target(args.heartbeat_timeout)
-        except TargetUnresponsive as exc:
-            print(f"mavconform: target unresponsive: {target}: {exc}", file=sys.stderr)
+        if not _found(session, target, args.heartbeat_timeout):
             return 1
         gcs = session.gcs
-        print(f"target {gcs.target[0]}/{gcs.target[1]} at {target}")
         armed = ", ".join(a.id for a in gcs.adaptations.armed()) or "none"
         print(f"adaptations: {gcs.adaptations.name} ({armed})")
         results = _operate(args, session, plan)
@@ -131,14 +136,28 @@ def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -
     return [session.set_current(args.seq, via_command=args.command)]
 
 
+def _found(session: GcsSession, target: UdpUri, timeout: float) -> bool:
+    """Wait for the target's HEARTBEAT and say who answered, or say that no one did."""
+    try:
+        session.wait_for_target(timeout)
+    except TargetUnresponsive as exc:
+        print(f"mavconform: target unresponsive: {target}: {exc}", file=sys.stderr)
+        return False
+    gcs = session.gcs
+    print(f"target {gcs.target[0]}/{gcs.target[1]} at {target}")
+    return True
+
+
 @contextlib.contextmanager
-def _session(args: argparse.Namespace, target: UdpUri) -> Iterator[GcsSession]:
+def _session(args: argparse.Namespace, target: UdpUri, **node: Any) -> Iterator[GcsSession]:
+    """A GCS on UDP for `target`; `node`: GcsNode keywords (`control_policy`)."""
     clock = MonotonicClock()
     timings = Timings().scaled(args.time_scale)
     config = GcsConfig(system=args.system, timings=timings, download_int=not args.float,
-                       adaptations=None if args.adapt == "auto" else NAMED[args.adapt])
+                       adaptations=None if args.adapt == "auto" else NAMED[args.adapt],
+                       control=_client_config(args) if args.operation == "control" else None)
     remote = target.address if target.mode == "udp" else None
-    gcs = GcsNode(config, remote=remote, wall_clock=clock.wall)
+    gcs = GcsNode(config, remote=remote, wall_clock=clock.wall, **node)
     bind = target.address if target.mode == "udpin" else (local_bind_for(target.host), 0)
     with UdpDriver(clock=clock) as driver:
         driver.add_node(gcs, bind=bind)   # bind first: a bad address leaves no capture file
@@ -146,3 +165,101 @@ def _session(args: argparse.Namespace, target: UdpUri) -> Iterator[GcsSession]:
             yield GcsSession(driver, gcs)
 
 
+# --- gcs control ----------------------------------------------------------------------------
+CONTROL_ACTIONS = ("request", "release", "allow", "disallow")
+ANSWERS = {"allow": Decision.ALLOW, "release": Decision.RELEASE, "refuse": Decision.REFUSE}
+
+
+def _add_control_parser(ops: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = ops.add_parser(
+        "control", help="request or release operator control, allow or disallow takeover",
+        description="Operator control (MAV_CMD_REQUEST_OPERATOR_CONTROL, development.xml), as the "
+                    "vehicle's CONTROL_STATUS names its system manager: request control (held by a "
+                    "GCS that must agree, wait up to --timeout for its answer), release it, or, in "
+                    "control, allow or disallow takeover by another GCS. Control lasts while this "
+                    "GCS's HEARTBEATs do: when the command exits the vehicle drops it after its "
+                    "owner-loss time unless --hold keeps it connected.")
+    p.add_argument("action", choices=CONTROL_ACTIONS, metavar="ACTION",
+                   help="request | release | allow | disallow")
+    p.add_argument("--timeout", type=_request_timeout, default=DEFAULT_REQUEST_TIMEOUT, metavar="S",
+                   help=f"request: param 3, how long the owner has to answer ({TIMEOUT_MIN:g}..{TIMEOUT_MAX:g}, "
+                        f"default {DEFAULT_REQUEST_TIMEOUT:g})")
+    p.add_argument("--allow-takeover", action="store_true",
+                   help="request: let later requests of other GCSs be granted without asking us")
+    p.add_argument("--hold", type=seconds_up_to(24 * 3600), metavar="S",
+                   help="stay connected S seconds after the operation (HEARTBEATs keep control), "
+                        "answering forwarded requests by --answer and printing control changes")
+    p.add_argument("--answer", choices=sorted(ANSWERS), default="refuse",
+                   help="how to answer another GCS's request the vehicle forwards while we are in "
+                        "control (default refuse: it times out)")
+    p.set_defaults(float=False, adapt="auto")   # mission-only options the session reads
+    return p
+
+
+def _request_timeout(text: str) -> float:
+    value = seconds_up_to(TIMEOUT_MAX)(text)
+    if value < TIMEOUT_MIN:
+        raise argparse.ArgumentTypeError(f"{text!r} must be at least {TIMEOUT_MIN:g} seconds (param 3)")
+    return value
+
+
+def _client_config(args: argparse.Namespace) -> ClientConfig:
+    base = ClientConfig()
+    return ClientConfig(ack_timeout=base.ack_timeout * args.time_scale, request_timeout=args.timeout)
+
+
+def _control(args: argparse.Namespace, target: UdpUri) -> int:
+    with _session(args, target, control_policy=always(ANSWERS[args.answer])) as session:
+        if not _found(session, target, args.heartbeat_timeout):
+            return 1
+        gcs = session.gcs
+        if session.wait_for_control_status(args.heartbeat_timeout):
+            print(f"control: {_holder(gcs.control.owner, gcs.control.takeover_allowed)} "
+                  f"(CONTROL_STATUS from {gcs.control.manager[0]}/{gcs.control.manager[1]})")
+        else:
+            print(f"mavconform: warning: no CONTROL_STATUS within {args.heartbeat_timeout:g} s: the target "
+                  "may not support operator control", file=sys.stderr)
+        shown = len(gcs.control_results)
+        result = _control_operation(args, session)
+        done = gcs.control_results[shown:]   # with answers to forwarded requests meanwhile
+        _print_control(done if result in done else [*done, result])   # (a refusal sent nothing)
+        if args.hold:
+            _hold(session, args.hold, len(gcs.control_results), len(gcs.control_events))
+    return 0 if result.ok else 1
+
+
+def _control_operation(args: argparse.Namespace, session: GcsSession) -> ControlResult:
+    if args.action == "request":
+        return session.request_control(allow_takeover=args.allow_takeover, timeout=args.timeout)
+    if args.action == "release":
+        return session.release_control()
+    return session.allow_takeover(args.action == "allow")
+
+
+def _hold(session: GcsSession, seconds: float, results: int, events: int) -> None:
+    """Stay connected, printing what happens to control, until `seconds` pass."""
+    gcs = session.gcs
+    print(f"holding for {seconds:g} s", flush=True)
+    end = session.now + seconds
+    while session.now < end:
+        session.driver.run_until(lambda: len(gcs.control_events) > events or len(gcs.control_results) > results,
+                                 timeout=min(1.0, max(0.0, end - session.now)))
+        for event in list(gcs.control_events)[events:]:
+            if isinstance(event, TakeoverRequested):
+                print(f"GCS {event.requester} asks for control (answer within {event.timeout:g} s)", flush=True)
+            else:
+                print(f"control: {_holder(event.owner, event.takeover_allowed)} (was {event.previous})", flush=True)
+        _print_control(gcs.control_results[results:])
+        events, results = len(gcs.control_events), len(gcs.control_results)
+
+
+def _print_control(results: list[ControlResult]) -> None:
+    for r in results:
+        detail = f" ({r.detail})" if r.detail else ""
+        print(f"{'ok  ' if r.ok else 'FAIL'} {r.operation.value}: {r.outcome.value}{detail}  "
+              f"[{r.finished - r.started:.2f} s, {r.retries} retries]", flush=True)
+
+
+def _holder(owner: int, takeover_allowed: bool) -> str:
+    who = f"GCS {owner} in control" if owner else "no GCS in control"
+    return f"{who}, takeover {'allowed' if takeover_allowed else 'disallowed'}"

@@ -8,6 +8,7 @@ import sys
 from typing import Any
 
 from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.handover.control_manager import ManagerConfig
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
 from mavconform.reference_impl.net.uri import FORMS
@@ -15,7 +16,7 @@ from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 from mavconform.reference_impl.vehicle import VehicleNode
 
 from .options import (add_fault_options, capture_to, describe_faults, fault_model, mavlink_id, positive,
-                      seq_number, sigterm_as_interrupt)
+                      seconds_up_to, seq_number, sigterm_as_interrupt)
 
 DESCRIPTION = """\
 Serve the reference vehicle on UDP until interrupted (or --duration): spec-exact by
@@ -24,6 +25,10 @@ lists what each changes, with the VARIANTS.md row and source of every knob).
 It sends HEARTBEAT at 1 Hz, serves mission / geofence / rally upload, download, clear and
 set-current, streams MISSION_CURRENT, and flies the mission in real time after
 MAV_CMD_MISSION_START (or at once with --autostart). Any GCS that talks to it is served.
+With --operator-control it is also its own system manager (MAV_CMD_REQUEST_OPERATOR_CONTROL,
+CONTROL_STATUS at 1 Hz): a GCS asks for control first and only that GCS may then change
+the plans or send commands; others may still download and are refused with
+MISSION_ACK DENIED / COMMAND_ACK NOT_IN_CONTROL. Control changes print as they happen.
 """
 
 EPILOG = """\
@@ -34,6 +39,7 @@ examples:
   mavconform vehicle --profile my-fork.toml            # base = "px4" plus your overrides
   mavconform vehicle --listen udp:127.0.0.1:0 --loss 0.1 --reorder 0.05 --seed 7
   mavconform vehicle --connect udp:127.0.0.1:14551     # talk first to a GCS listening there
+  mavconform vehicle --operator-control --owner-loss 3 # `mavconform gcs control request` first
 """
 
 
@@ -65,6 +71,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--duration", type=positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
     p.add_argument("--quiet", action="store_true", help="print only the listening line")
+    p.add_argument("--operator-control", action="store_true",
+                   help="be the system manager of operator control (development.xml 32100): only the GCS "
+                        "in control may upload, clear, set the current item or send commands; while no GCS "
+                        "is, none may (see --open-when-unowned)")
+    p.add_argument("--owner-loss", type=seconds_up_to(3600), metavar="S",
+                   help=f"with --operator-control: drop a GCS in control after S seconds without its HEARTBEAT "
+                        f"(default {ManagerConfig().owner_loss_timeout:g}); the loss is announced in a STATUSTEXT")
+    p.add_argument("--open-when-unowned", action="store_true",
+                   help="with --operator-control: while no GCS is in control, let any GCS change the plans "
+                        "(for GCSs that never ask for control)")
     add_fault_options(p)
     p.set_defaults(run=run)
 
@@ -78,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         behaviour = dataclasses.replace(behaviour, capacity={**behaviour.capacity, MissionType.MISSION: args.capacity})
     config = dataclasses.replace(profile.config, system=args.system, component=args.component,
                                  autostart=args.autostart, speed=args.speed, behaviour=behaviour,
-                                 single_peer_link=args.single_peer)
+                                 single_peer_link=args.single_peer, control=_control(args))
     faults = fault_model(args)
     clock = MonotonicClock()
     vehicle = _mutant(args.mutant, config, args.profile) if args.mutant else VehicleNode(config, wall_clock=clock.wall)
@@ -89,8 +105,24 @@ def run(args: argparse.Namespace) -> int:
         with capture_to(driver, args.capture):   # after the bind: a bad address leaves no file
             print(f"reference vehicle {args.system}/{args.component} (profile {profile.name}) listening on "
                   f"udp:{address[0]}:{address[1]} (faults: {describe_faults(args)})", flush=True)
+            if config.control is not None and not args.quiet:
+                unowned = "any GCS may" if config.control.open_when_unowned else "no GCS may"
+                print(f"operator control on: until a GCS takes control {unowned} change the plans; "
+                      f"a GCS in control is lost after {config.control.owner_loss_timeout:g} s without "
+                      "its HEARTBEAT", flush=True)
             _serve(driver, vehicle, clock, args)
     return 0
+
+
+def _control(args: argparse.Namespace) -> ManagerConfig | None:
+    if not args.operator_control:
+        for given, option in ((args.owner_loss is not None, "--owner-loss"),
+                              (args.open_when_unowned, "--open-when-unowned")):
+            if given:
+                raise UsageError(f"{option} needs --operator-control")
+        return None
+    loss = ManagerConfig().owner_loss_timeout if args.owner_loss is None else args.owner_loss
+    return ManagerConfig(owner_loss_timeout=loss, open_when_unowned=args.open_when_unowned)
 
 
 def _mutant(name: str, config: Any, profile: str) -> VehicleNode:

@@ -6,15 +6,26 @@ time (`upload(..., now)`); results collect in `results` in the order they finish
 
 How the GCS adapts to the vehicle (adaptations.py) is chosen from the target's HEARTBEAT
 `autopilot` field, as QGroundControl picks its firmware plugin, unless the config fixes it.
+
+Operator control (MAV_CMD_REQUEST_OPERATOR_CONTROL) is off unless `GcsConfig.control` is
+set; then a `ControlClient` follows the vehicle's CONTROL_STATUS, runs requests, releases
+and takeover flags, and answers requests the vehicle forwards by the injected policy. Its
+results go to `control_results`, apart from the mission `results`: the client also finishes
+operations of its own (answers to forwarded requests), which must not be taken for a
+mission operation's result. The 1 Hz HEARTBEAT is what keeps this GCS in control.
 """
 
 from __future__ import annotations
 
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 from .endpoint import MavlinkEndpoint
+from .errors import LocalProtocolError
+from .handover.control_client import ClientConfig, ControlClient, Policy, always
+from .handover.control_results import ControlResult, Decision, StatusChanged, TakeoverRequested
 from .mission.actions import Finished, Peer
 from .mission import messages as m
 from .mission.adaptations import NONE, Adaptations, for_autopilot
@@ -39,11 +50,18 @@ class GcsConfig:
     signing: SigningKey | None = None
     # How to adapt to the vehicle; None: chosen from its HEARTBEAT autopilot (for_autopilot)
     adaptations: Adaptations | None = None
+    # Operator control; None: off (a GCS that never asks for control, as before)
+    control: ClientConfig | None = None
+
+
+MAX_CONTROL_EVENTS = 1000
 
 
 class GcsNode:
     def __init__(self, config: GcsConfig | None = None, *, remote: Address | None = None,
-                 wall_clock: Callable[[], float] = time.time) -> None:
+                 wall_clock: Callable[[], float] = time.time, control_policy: Policy = always(None)) -> None:
+        """`control_policy` answers requests for control the vehicle forwards to us while we
+        own it (None from it: the operator answers later with `answer_takeover`)."""
         self.config = cfg = config or GcsConfig()
         self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
                                         signing=cfg.signing, wall_clock=wall_clock)
@@ -56,6 +74,10 @@ class GcsNode:
         self.adaptations: Adaptations = cfg.adaptations or NONE
         self.received: list[Any] = []   # every message from the target (the first 10 000)
         self._next_heartbeat: float | None = 0.0
+        self.control: ControlClient | None = None
+        self.control_policy = control_policy
+        self.control_results: list[ControlResult] = []
+        self.control_events: deque[TakeoverRequested | StatusChanged] = deque(maxlen=MAX_CONTROL_EVENTS)
         if self.target is not None:
             self._make_client()
 
@@ -88,6 +110,30 @@ class GcsNode:
     def busy(self) -> bool:
         return self.client is not None and self.client.busy
 
+    # --- operator control -----------------------------------------------------------------
+    def require_control(self) -> ControlClient:
+        """The control client, or a LocalProtocolError saying why there is none yet."""
+        if self.config.control is None:
+            raise LocalProtocolError("operator control is off: set GcsConfig.control")
+        if self.control is None:
+            raise LocalProtocolError("no target vehicle yet: wait for its HEARTBEAT first")
+        return self.control
+
+    def request_control(self, now: float, *, allow_takeover: bool = False, timeout: float | None = None,
+                        wait: bool = True) -> None:
+        self._run_control(self.require_control().request_control(
+            now, allow_takeover=allow_takeover, timeout=timeout, wait=wait))
+
+    def release_control(self, now: float) -> None:
+        self._run_control(self.require_control().release_control(now))
+
+    def set_takeover(self, allowed: bool, now: float) -> None:
+        self._run_control(self.require_control().set_takeover(allowed, now))
+
+    def answer_takeover(self, decision: Decision, now: float) -> None:
+        """The operator's late answer to a forwarded request the policy left open."""
+        self._run_control(self.require_control().answer(decision, now))
+
     # --- DatagramNode ---------------------------------------------------------------------
     def datagram_received(self, data: bytes, source: Address, now: float) -> None:
         for frame in self.endpoint.receive(data, source):
@@ -102,21 +148,27 @@ class GcsNode:
                 self._adapt_to(frame.msg)
             if self.client is not None:
                 self._run(self.client.handle(frame, now))
+            if self.control is not None:
+                self._run_control(self.control.handle(frame, now))
             if len(self.received) < 10_000:
                 self.received.append(frame.msg)
 
     def poll(self, now: float) -> None:
         if self.client is not None:
             self._run(self.client.poll(now))
+        if self.control is not None:
+            self._run_control(self.control.poll(now))
         if self._next_heartbeat is not None and now >= self._next_heartbeat:
             self._next_heartbeat = now + m.HEARTBEAT_PERIOD
             self.endpoint.send(m.gcs_heartbeat_message())
 
     def next_deadline(self) -> float | None:
-        client = self.client.next_deadline() if self.client is not None else None
-        if client is None:
-            return self._next_heartbeat
-        return min(client, self._next_heartbeat) if self._next_heartbeat is not None else client
+        best = self._next_heartbeat
+        for engine in (self.client, self.control):
+            t = engine.next_deadline() if engine is not None else None
+            if t is not None and (best is None or t < best):
+                best = t
+        return best
 
     def take_outgoing(self) -> list[tuple[bytes, Address]]:
         return self.endpoint.take_outgoing()
@@ -150,12 +202,21 @@ class GcsNode:
         self.client = MissionClient(cfg.system, cfg.component, self.target, cfg.timings,
                                     upload_int=cfg.upload_int, download_int=cfg.download_int,
                                     adaptations=self.adaptations)
+        if cfg.control is not None:
+            self.control = ControlClient(cfg.system, cfg.component, self.target, cfg.control,
+                                         policy=self.control_policy)
 
     def _require_client(self) -> MissionClient:
         if self.client is None:
-            from .errors import LocalProtocolError
             raise LocalProtocolError("no target vehicle yet: wait for its HEARTBEAT first")
         return self.client
+
+    def _run_control(self, actions: list[Any]) -> None:
+        for action in self.endpoint.send_all(actions):
+            if isinstance(action, Finished):
+                self.control_results.append(action.result)
+            else:
+                self.control_events.append(action)
 
     def _run(self, actions: list[Any]) -> None:
         for action in self.endpoint.send_all(actions):

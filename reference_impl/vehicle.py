@@ -2,16 +2,27 @@
 
 A `DatagramNode`, so the same object runs under `SimNetwork` (virtual time) or the UDP
 driver (real time). Any number of GCSs may talk to it; each is learned from its traffic.
+
+Operator control (MAV_CMD_REQUEST_OPERATOR_CONTROL, development.xml) is off unless
+`VehicleConfig.control` is set, so every mission verdict stays what it was. When on, the
+`ControlManager` sees every frame first: its own messages (the request, the owner's ACK of
+a forwarded request) stop there, and its `screen` answers a GCS not in control
+(COMMAND_ACK NOT_IN_CONTROL, MISSION_ACK DENIED, ...) before the mission server or the
+command handler can act on what it sent.
 """
 
 from __future__ import annotations
 
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable
 
 from .endpoint import MavlinkEndpoint
 from .flight import FlightSim, Position
+from .handover import control_messages as cm
+from .handover.control_manager import ControlManager, ManagerConfig
+from .handover.control_results import ControlChanged, OwnerLost
 from .mission import messages as m
 from .mission.actions import Send
 from .mission.behaviour import ServerBehaviour
@@ -28,6 +39,7 @@ MODE_FLAGS_IDLE = _d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
 MODE_FLAGS_FLYING = _d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | _d.MAV_MODE_FLAG_AUTO_ENABLED
 HEARTBEAT_PERIOD = 1.0
 POSITION_PERIOD = 1.0
+MAX_CONTROL_EVENTS = 1000   # kept for whoever reads them (the mission computer, later)
 
 
 @dataclass(frozen=True)
@@ -49,6 +61,12 @@ class VehicleConfig:
     custom_mode_mission: int = 0
     # the GCS link is bound to one peer address (real SITL links: VARIANTS.md L1, L2)
     single_peer_link: bool = False
+    # Operator control. None (the default): no system manager, 32100 is UNSUPPORTED and any
+    # GCS may change state, as before. Set: the vehicle is its own system manager. Unowned,
+    # the filter stays closed unless `control.open_when_unowned`: a GCS asks for control
+    # first (the request, mission downloads and telemetry requests are always let through),
+    # so no GCS can change the plan of a vehicle it never took.
+    control: ManagerConfig | None = None
 
 
 class VehicleNode:
@@ -70,15 +88,25 @@ class VehicleNode:
         self._seen_quick = (self.server.store.version, 0, 0)
         self._next_heartbeat: float | None = 0.0
         self._next_position: float | None = 0.0
+        self.control = ControlManager(cfg.system, cfg.component, cfg.control) if cfg.control is not None else None
+        self.control_events: deque[ControlChanged | OwnerLost] = deque(maxlen=MAX_CONTROL_EVENTS)
+        self.refused = 0              # frames the control filter stopped
 
     @property
     def store(self):
         return self.server.store
 
+    @property
+    def owner(self) -> int:
+        """The GCS in control (`gcs_main`), 0 for none or without operator control."""
+        return self.control.owner if self.control is not None else 0
+
     # --- DatagramNode ---------------------------------------------------------------------
     def datagram_received(self, data: bytes, source: Address, now: float) -> None:
         for frame in self.endpoint.receive(data, source):
             self.frames_received += 1
+            if self.control is not None and not self._passes_control(frame, now):
+                continue
             msg = frame.msg
             name = msg._type
             server = self.server
@@ -95,6 +123,8 @@ class VehicleNode:
         self._note_changes()
 
     def poll(self, now: float) -> None:
+        if self.control is not None:
+            self._on_control(self.control.poll(now))
         self._send(self.server.poll(now))
         self._note_changes()
         self._send(self.flight.poll(now))
@@ -107,13 +137,50 @@ class VehicleNode:
 
     def next_deadline(self) -> float | None:
         best = self._next_heartbeat
-        for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline()):
+        control = self.control.next_deadline() if self.control is not None else None
+        for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline(), control):
             if t is not None and (best is None or t < best):
                 best = t
         return best
 
     def take_outgoing(self) -> list[tuple[bytes, Address]]:
         return self.endpoint.take_outgoing()
+
+    # --- operator control -----------------------------------------------------------------
+    def _passes_control(self, frame: Any, now: float) -> bool:
+        """Whether `frame` goes on to the mission server and command handling. The manager
+        hears every frame (the owner's HEARTBEATs keep it in control), keeps its own, and
+        answers a GCS not in control in their place."""
+        control = self.control
+        self._on_control(control.handle(frame, now))
+        if control.consumes(frame.msg):
+            return False
+        refusal = control.screen(frame)
+        if refusal is None:
+            return True
+        self.refused += 1
+        if refusal.actions:   # answered refusals only: a stream (MANUAL_CONTROL) is dropped unlogged
+            self.events.append(f"control: refused {refusal.reason}")
+        self._send(list(refusal.actions))
+        return False
+
+    def _on_control(self, actions: list[Any]) -> None:
+        """Send what the manager sends (CONTROL_STATUS, ACKs, forwarded requests); keep and
+        log its events. Owner loss is also announced in a STATUSTEXT: the XML's "If all owning
+        GCS are disconnected the vehicle should GCS loss failsafe, and broadcast a
+        CONTROL_STATUS indicating that it has no owner(s)" says what to broadcast, not how an
+        operator hears of it; the failsafe itself is for whoever reads `control_events`."""
+        for action in self.endpoint.send_all(actions):
+            self.control_events.append(action)
+            if isinstance(action, OwnerLost):
+                silent = action.at - action.last_heard
+                self.events.append(f"control: GCS {action.sysid} lost ({silent:.1f} s without its HEARTBEAT)")
+                self.endpoint.send(cm.statustext(_d.MAV_SEVERITY_CRITICAL,
+                                                 f"GCS {action.sysid} lost: no GCS in control"))
+            else:
+                was = f" (was {action.previous})" if action.previous != action.owner else ""
+                takeover = "allowed" if action.takeover_allowed else "disallowed"
+                self.events.append(f"control: gcs_main {action.owner}{was}, takeover {takeover}: {action.reason}")
 
     # --- internals ------------------------------------------------------------------------
     def _plan_state(self) -> tuple:
