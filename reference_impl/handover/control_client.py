@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from ..errors import LocalProtocolError
+from ..state_table import next_state
 from ..mission.actions import Finished, Peer, Send
 from ..wire.dialect import mavlink as _d
 from ..wire.frame import Frame
@@ -345,8 +346,6 @@ class ControlClient:
 
     def _move(self, event: ClientEvent) -> None:
         old = self.state
-        new = CLIENT_TRANSITIONS.get((old, event))
-        if new is None:
-            raise LocalProtocolError(f"operator control client: no transition from {old.name} on {event.name}")
+        new = next_state(CLIENT_TRANSITIONS, old, event, "operator control client")
         self.state = new
         self.history.append((old, event, new))

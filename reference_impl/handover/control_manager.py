@@ -30,7 +30,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import common as _bundled
 
-from ..errors import LocalProtocolError
+from ..state_table import next_state
 from ..mission.actions import Peer, Send
 from ..wire.dialect import mavlink as _d
 from ..wire.frame import Frame
@@ -363,9 +363,7 @@ class ControlManager:
 
     def _move(self, event: ControlEvent) -> None:
         old = self.state
-        new = MANAGER_TRANSITIONS.get((old, event))
-        if new is None:
-            raise LocalProtocolError(f"operator control: no transition from {old.name} on {event.name}")
+        new = next_state(MANAGER_TRANSITIONS, old, event, "operator control")
         self.state = new
         self.recent.append((old, event, new))
         if self._record:

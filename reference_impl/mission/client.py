@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 from ..errors import LocalProtocolError
+from ..state_table import next_state
 from ..wire.frame import Frame
 from . import messages as m
 from .actions import Finished, Peer, Send
@@ -598,10 +599,7 @@ class MissionClient:
         return Send(msg, self.target)
 
     def _move(self, event: ClientEvent) -> None:
-        try:
-            new_state = CLIENT_TRANSITIONS[(self.state, event)]
-        except KeyError:
-            raise LocalProtocolError(f"client: no transition for {event.name} in {self.state.name}") from None
+        new_state = next_state(CLIENT_TRANSITIONS, self.state, event, "client")
         self.history.append((self.state, event, new_state))
         self.state = new_state
 

@@ -26,7 +26,7 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..errors import LocalProtocolError
+from ..state_table import next_state
 from ..wire.frame import Frame
 from . import messages as m
 from .actions import Peer, Send
@@ -583,13 +583,7 @@ class MissionServer:
         slot.partner, slot.deadline, slot.received, slot.count, slot.expected = None, None, [], 0, 0
 
     def _move(self, slot: _Transfer, event: SlotEvent) -> None:
-        key = (slot.state, event)
-        try:
-            new_state = ALL_SERVER_TRANSITIONS[key]
-        except KeyError:
-            raise LocalProtocolError(
-                f"server {slot.mission_type.label}: no transition for {event.name} in {slot.state.name}"
-            ) from None
+        new_state = next_state(ALL_SERVER_TRANSITIONS, slot.state, event, f"server {slot.mission_type.label}")
         if self._record:
             self.stats.history.append((slot.mission_type, slot.state, event, new_state))
         slot.state = new_state
