@@ -2,7 +2,8 @@
 
 Format "mavconform-run/2" (reports/run_document.py checks it and says where what lives). It
 is built once, at the end of a run, from the results and the run's options; every report
-is a view of it. What differs between two runs of the same target (start time, durations,
+is a view of it. Each clause's `decided_by` is the index of the exchange event its check
+judged last (the report marks it): an index, so stable, since the events' order is. What differs between two runs of the same target (start time, durations,
 event times, forced waits, the target's ephemeral address, the numbers of `Measured`
 texts) goes into its `volatile` section only, so the rest diffs to nothing. A run stopped
 by a signal says so (`run.interrupted`, where and by what) and its verdict is
@@ -78,7 +79,7 @@ def _clause(r: ClauseResult, gating: bool) -> dict[str, Any]:
     return {"id": c.id, "group": c.group, "level": c.level.value, "role": c.role.value,
             "title": c.title, "source": c.source, "requirement": c.requirement,
             "outcome": r.outcome.value, "gating": gating, "detail": r.detail,
-            "expectation": r.expectation, "exchange": r.exchange}
+            "expectation": r.expectation, "exchange": r.exchange, "decided_by": r.decided_by}
 
 
 def _volatile(r: ClauseResult, clause: dict[str, Any]) -> dict[str, Any]:

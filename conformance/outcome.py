@@ -51,6 +51,7 @@ class ClauseResult:
     duration_s: float = 0.0
     exchange: list[dict[str, Any]] = field(default_factory=list)
     expectation: str | None = None   # the expectations file's reason, when it lists this clause
+    decided_by: int | None = None    # index in `exchange` of the event the verdict is about (Tester)
 
 
 @contextmanager

@@ -310,9 +310,15 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
         where = traceback.extract_tb(exc.__traceback__)[-1]
         outcome, detail = Outcome.ERROR, (f"internal error in check {fn.__name__}: "
                                           f"{type(exc).__name__}: {exc} ({where.filename}:{where.lineno})")
+    # the event the check last judged (see Tester); not for a verdict no message decided:
+    # a skip, a bug in the check, a crash
+    decided_by = exchange.decided_by if outcome is not Outcome.SKIPPED else None
+    if outcome is Outcome.ERROR and detail.startswith("internal error"):
+        decided_by = None
     crash = session.guard.crash if session.guard is not None else None
     if crash is not None and outcome is not Outcome.PASS and "crashed" not in detail:
         outcome, detail = Outcome.ERROR, f"target unresponsive: the in-process vehicle crashed: {crash}"
+        decided_by = None
     end = session.t.now()
     events = exchange.finish(end)
     for t in session.testers():
@@ -320,7 +326,7 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     _settle(session, began_at)
     _mark(session, f"clause {clause.id}: {outcome.value}", "info" if outcome is Outcome.PASS else "warning")
     return DecidedResult(clause.id, outcome, detail, round(end - begin, 6), events,
-                         measured=_measured(*caught))
+                         decided_by=decided_by, measured=_measured(*caught))
 
 
 SETTLE_QUIET = 0.005   # s without a frame that counts as "the target has finished replying"

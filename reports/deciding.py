@@ -1,9 +1,11 @@
 """Which event of a clause's exchange decided its verdict, so the diagram can mark it.
 
-The checks do not record it (yet): a clause would carry `decided_by`, the index of the event
-its deciding `expect`/`poll_for`/`collect` consumed, or of the note an expectation that
-timed out wrote. Until then this guesses from the verdict's own text, and a recorded index,
-where a document has one, wins. The guess, first rule that finds something:
+The checks record it: a clause carries `decided_by`, the index of the event its check
+judged last (the frame its last `expect`/`poll_for`/`collect` consumed, the note an
+expectation that timed out wrote, the frame that broke an `expect_silence`, or one the check
+named). That index wins. A document without one (an older run, a clause whose deciding
+message was not kept, a verdict from a shared observation) gets a guess from the verdict's
+own text, first rule that finds something:
 
 1. a note that restates the verdict (a timed-out expectation notes "expected X within N s:
    nothing matching arrived", and the verdict quotes "expected X within N s"): the silence
@@ -36,8 +38,8 @@ def deciding_event(clause: dict[str, Any], events: list[dict[str, Any]],
                    detail: str | None = None) -> int | None:
     """The index in `events` (the clause's exchange) of the event that decided the clause.
     `detail`: the verdict's text as a person reads it (default: the clause's own)."""
-    recorded = clause.get("decided_by")
-    if isinstance(recorded, int) and not isinstance(recorded, bool) and 0 <= recorded < len(events):
+    recorded = recorded_event(clause, events)
+    if recorded is not None:
         return recorded
     if not events or clause.get("outcome") == SKIPPED:
         return None
@@ -49,6 +51,15 @@ def deciding_event(clause: dict[str, Any], events: list[dict[str, Any]],
             return found
     received = [i for i, e in enumerate(events) if e["dir"] == RX]
     return received[-1] if received else len(events) - 1
+
+
+def recorded_event(clause: dict[str, Any], events: list[dict[str, Any]]) -> int | None:
+    """The clause's own `decided_by`, if it names one of `events`; else None (then
+    `deciding_event` guesses, and the report must not say the check recorded it)."""
+    recorded = clause.get("decided_by")
+    if isinstance(recorded, int) and not isinstance(recorded, bool) and 0 <= recorded < len(events):
+        return recorded
+    return None
 
 
 def _restating_note(detail: str, events: list[dict[str, Any]]) -> int | None:

@@ -20,7 +20,7 @@ from typing import Any
 from urllib.parse import quote
 
 from mavconform.reports import run_document as rd
-from mavconform.reports.deciding import deciding_event
+from mavconform.reports.deciding import deciding_event, recorded_event
 from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
 from mavconform.reports.text import (clean, identity_text, interruption, one_line, seconds,
@@ -323,7 +323,7 @@ def _diagram(doc: dict[str, Any], clause: dict[str, Any]) -> str:
     svg = sequence_diagram(events, decided=decided, target=_target_lane(clause))
     out = f'<div class="diagram">{svg}</div>'
     if decided is not None:
-        how = ("as the check recorded it" if isinstance(clause.get("decided_by"), int)
+        how = ("as the check recorded it" if recorded_event(clause, events) == decided
                else "as read from the verdict")
         out += (f'<p class="decided-key"><b>▶</b> on a red band: the event that decided the '
                 f"verdict ({how}).</p>")

@@ -26,7 +26,8 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
     restore   {status: restored|unchanged|failed|skipped, detail}
     capture   file name of the MCAP capture, or null
     clauses   [{id, group, level, role, title, source, requirement, outcome, gating,
-                detail, expectation, exchange: [{dir: tx|rx|note, peer, msg, fields}]}]
+                detail, expectation, exchange: [{dir: tx|rx|note, peer, msg, fields}],
+                [decided_by: index in exchange of the event the check judged last, or null]}]
     volatile  {started, duration_s, forced_wait_s (or null), address (the target's, or null),
                clauses: {ID: {duration_s, events: [t, ...],      one t per exchange event:
                                                                  s from the clause's start
@@ -83,6 +84,8 @@ RUN_KNOWN = {"seed": ("integer", "null"), "time_scale": ("number",), "strict": (
              "interrupted_by": ("string", "null")}
 IDENTITY_KNOWN = {"type": ("integer",), "autopilot": ("integer",),
                   "mavlink_version": ("integer",)}
+# optional clause keys: decided_by is an index, so stable (the events' order is)
+CLAUSE_KNOWN = {"decided_by": ("integer", "null")}
 VOLATILE_KNOWN = {"started": ("string",), "duration_s": ("number",),
                   "forced_wait_s": ("number", "null"), "address": ("string", "null")}
 # Where format 1 kept the volatile values (and where format 2 refuses them).
@@ -360,8 +363,15 @@ class _Checker:
             self.duration(clause, path)
         else:
             self.moved(clause, ("duration_s",), path)
-        for index, event in enumerate(self.key(clause, "exchange", path, "array")):
+        exchange = self.key(clause, "exchange", path, "array")
+        for index, event in enumerate(exchange):
             self.event(event, f"{path}.exchange[{index}]")
+        for key, kinds in CLAUSE_KNOWN.items():
+            self.optional(clause, key, path, *kinds)
+        decided = clause.get("decided_by")
+        if decided is not None and not 0 <= decided < len(exchange):
+            self.fail(f"{path}.decided_by", f"{decided} is not the index of an event in the "
+                                            f"exchange ({len(exchange)} events)")
         return clause_id
 
     def event(self, event: Any, path: str) -> None:

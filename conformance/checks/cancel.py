@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import MissionResult
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.wire.frame import Frame
 
 from ..harness import plans, procedures
 from ..harness.match import ITEMS, ack, msg, request
@@ -54,12 +55,14 @@ def stray_item_or_request_not_accepted(s: Session) -> None:
     t.send(m.item_message(stray[0], t.target))
     _judge_stray_answers(t, "a stray MISSION_ITEM_INT 0")
     held = procedures.stored(t, MISSION)   # a download ended by the GCS's ACK: idle again
+    read = t.decided_by   # where `held` was read, for a verdict about it
     t.mark()
     t.note("the download is over, so the vehicle is idle: a MISSION_REQUEST_INT 1 with no "
            "MISSION_REQUEST_LIST before it")
     t.send(m.request_message(1, MISSION, t.target))
     _judge_stray_answers(t, "a stray MISSION_REQUEST_INT 1")
     if any(procedures.comparable(it, t.form) == procedures.comparable(stray[0], t.form) for it in held):
+        t.decided_by = read
         raise ClauseFailed("a stray MISSION_ITEM_INT 0 sent in idle is now in the stored plan; expected it "
                            "to be ignored or refused")
     if not procedures.same_plan(held, old, t.form):
@@ -73,12 +76,15 @@ def _judge_stray_answers(t: Tester, what: str) -> None:
         if getattr(got, "mission_type", MT) != MT:
             continue
         if got._type == "MISSION_ACK" and got.type == MissionResult.ACCEPTED:
+            t.decided_by_frame(frame)
             raise ClauseFailed(f"{what} in idle was answered MISSION_ACK ACCEPTED; expected no answer or "
                                "an error MISSION_ACK")
         if got._type in ITEMS:
+            t.decided_by_frame(frame)
             raise ClauseFailed(f"{what} in idle was answered {brief(got)}, as if a download were running; "
                                "expected no answer or an error MISSION_ACK")
         if got._type in ("MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_COUNT"):
+            t.decided_by_frame(frame)
             raise ClauseFailed(f"{what} in idle drew {brief(got)}: the vehicle took it as part of a "
                                "transfer; expected no answer or an error MISSION_ACK")
 
@@ -89,6 +95,7 @@ class CancelledUpload:
     late_requests: list[tuple[float, int]]   # (s after the cancel, seq) of requests that still came
     stored: list[MissionItem]
     window: float                            # how long requests were watched for (unscaled s)
+    first_late: Frame | None = None          # the first late request's frame: it decides MIS.CAN.01
 
 
 def cancelled_upload(s: Session) -> CancelledUpload:
@@ -106,7 +113,8 @@ def _observe_cancelled_upload(t: Tester, window: float) -> CancelledUpload:
     late = [(dt, f.msg.seq) for dt, f in seen]
     if late:   # make sure it is over before reading the plan back
         t.send(m.ack_message(CANCELLED, MISSION, t.target))
-    return CancelledUpload(old, late, procedures.stored(t, MISSION), window)
+    return CancelledUpload(old, late, procedures.stored(t, MISSION), window,
+                           seen[0][1] if seen else None)
 
 
 @check("MIS.CAN.01")
@@ -114,6 +122,7 @@ def cancel_stops_upload_requests(s: Session) -> None:
     obs = cancelled_upload(s)
     if obs.late_requests:
         dt, seq = obs.late_requests[0]
+        s.t.decided_by_frame(obs.first_late)
         raise ClauseFailed(Measured(
             f"after MISSION_ACK OPERATION_CANCELLED the vehicle kept requesting: "
             f"{len(obs.late_requests)} request(s) in <window> s, "

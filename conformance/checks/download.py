@@ -77,6 +77,7 @@ def request_list_draws_stored_count(s: Session) -> None:
     items = plans.mission(6, variant=11)
     procedures.ensure_plan(t, items, MISSION)
     count = _list(t)
+    counted = t.decided_by   # the MISSION_COUNT judged, not the items read after it
     _end(t, MissionResult.OPERATION_CANCELLED)
     if count == len(items):
         return
@@ -85,6 +86,7 @@ def request_list_draws_stored_count(s: Session) -> None:
     if held is None or not procedures.same_plan(held, items[:len(held)], t.form):
         raise PreconditionFailed(f"the vehicle reports {count} items and does not hold the "
                                  f"{len(items)}-item plan it accepted (MIS.UP.04 judges that)")
+    t.decided_by = counted
     raise ClauseFailed(f"MISSION_REQUEST_LIST was answered with count {count}; expected "
                        f"{len(items)} (the vehicle holds the {len(items)}-item plan just uploaded)")
 

@@ -81,6 +81,7 @@ def every_ack_carries_a_result(s: Session) -> None:
                 continue
             acks += 1
             if got.type not in RESULTS:
+                t.decided_by_frame(frame)
                 raise ClauseFailed(f"{label} drew MISSION_ACK{{type={got.type}, mission_type="
                                    f"{got.mission_type}}}: {got.type} is not a MAV_MISSION_RESULT "
                                    f"value (0..{max(RESULTS)})")

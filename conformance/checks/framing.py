@@ -166,6 +166,7 @@ def packet_sequence_counts_up(s: Session) -> None:
         step = (b.seq - a.seq) % 256
         if step == 0 or step > MAX_STEP_FORWARD:
             kind = "repeated" if step == 0 else f"went back by {256 - step}"
+            t.decided_by_frame(b)
             raise ClauseFailed(f"the packet sequence {kind}: {a.msg._type} had seq {a.seq}, the next frame "
                                f"({b.msg._type}) seq {b.seq}; each frame should carry the previous seq + 1 "
                                "(mod 256)")
@@ -200,7 +201,8 @@ def heartbeat_is_regular(s: Session) -> None:
 
     t.wait_until(lambda: len(heartbeats()) >= 2, max(0.0, closes - t.now()) / t.scale)
     seen = [round(at - opened, 3) for at in heartbeats() if at <= closes]
-    t.note(Measured(f"HEARTBEATs at <at> s into a {HEARTBEAT_WINDOW * t.scale:g} s window", at=str(seen)))
+    t.decided_by = t.note(Measured(f"HEARTBEATs at <at> s into a {HEARTBEAT_WINDOW * t.scale:g} s window",
+                                   at=str(seen)))   # HEARTBEATs are not drawn: the note sums them up
     if len(seen) < 2:
         raise ClauseFailed(f"{len(seen)} HEARTBEAT(s) in {HEARTBEAT_WINDOW * t.scale:g} s; expected at least 2 "
                            "(a component broadcasts its HEARTBEAT regularly, nominally at 1 Hz)")
@@ -293,6 +295,7 @@ def damaged_frames_not_acted_on(s: Session) -> None:
     except TargetUnresponsive as exc:
         raise _silenced(s, f"after the damaged frames the target fell silent: {exc}") from None
     if replies:
+        t.decided_by_frame(replies[0])
         raise ClauseFailed(f"MISSION_CLEAR_ALL / MISSION_COUNT 0 frames with a bad checksum or cut off "
                            f"drew {brief(replies[0].msg)}; expected no answer (a damaged frame is dropped)")
     if not alive:

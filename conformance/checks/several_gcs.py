@@ -114,6 +114,7 @@ def other_system_messages_ignored(s: Session) -> None:
         t.send(message)
     replies = answers_before_sentinel(t)
     if replies:
+        t.decided_by_frame(replies[0])
         raise ClauseFailed(f"messages addressed to system {other[0]} drew {brief(replies[0].msg)} from "
                            f"system {system}; expected no answer")
     procedures.require_same_plan(procedures.stored(t, MISSION), old,

@@ -260,6 +260,7 @@ def out_of_sequence_is_not_an_error(s: Session) -> None:
         raise ClauseFailed(f"the vehicle answered the out-of-sequence item with MISSION_ACK {code}, an error "
                            f"a GCS takes as the end of its upload, though the vehicle went on requesting "
                            f"(item {went_on.msg.seq}); expected the item dropped without an error")
+    t.decided_by_frame(final)   # not the request that did not follow it
     raise ClauseFailed(f"the upload ended with {code} after an out-of-sequence item; expected it to go "
                        "on and end ACCEPTED")
 
@@ -306,6 +307,7 @@ def float_items_are_accepted(s: Session) -> None:
     if nxt.msg._type != "MISSION_ACK" and nxt.msg.seq == 0:
         again = t.poll_for(request(mission_type=MT) | ack(mission_type=MT), t.timings.default_timeout)
         if again is None or (again.msg._type != "MISSION_ACK" and again.msg.seq == 0):
+            t.decided_by_frame(nxt if again is None else again)   # item 0 asked for again
             t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, MISSION, t.target))
             raise ClauseFailed("item 0 sent as MISSION_ITEM was not taken: the vehicle asked for item 0 "
                                "again; expected it to go on to item 1 as it does for MISSION_ITEM_INT")
@@ -320,12 +322,14 @@ def float_items_are_accepted(s: Session) -> None:
         raise ClauseFailed(f"an upload in MISSION_ITEM messages ended with "
                            f"{procedures.result_name(final.msg.type)}, expected ACCEPTED")
     got = procedures.stored(t, MISSION)
+    read = t.decided_by   # the verdict below is about this download, not the one after it
     if len(got) == len(items) and all(_close(g, w, t.form) for g, w in zip(got, items)):
         return
     procedures.ensure_plan(t, items, MISSION)
     as_int = procedures.stored(t, MISSION)
     if len(got) == len(as_int) and all(_close(g, w, t.form) for g, w in zip(got, as_int)):
         return   # stored as the same items sent as MISSION_ITEM_INT are (MIS.UP.04 judges those)
+    t.decided_by = read
     raise ClauseFailed(f"after a MISSION_ITEM upload the vehicle holds {got}, expected {items} "
                        "(positions within float32 precision), as it does after a MISSION_ITEM_INT upload")
 
@@ -384,6 +388,7 @@ def rejected_item_keeps_plan(s: Session) -> None:
     except PreconditionFailed:
         later = [f for _, f in t.node.inbox[rejected_at:] if request(mission_type=MT)(f)]
         if later:   # the plan could not be read back because the upload never ended
+            t.decided_by_frame(later[0])
             raise ClauseFailed(f"after its {procedures.result_name(frame.msg.type)} the vehicle went on "
                                f"requesting (item {later[0].msg.seq}): the error did not end the upload") from None
         raise

@@ -2,6 +2,8 @@
 
 It is what the HTML report draws as a sequence diagram. Only mission traffic and the
 messages mission clauses look at are kept: a SITL's telemetry would bury the exchange.
+It also holds which of its events decided the clause (`decide`), so the report marks the
+message the check judged instead of guessing it from the verdict's text.
 """
 
 from __future__ import annotations
@@ -27,16 +29,39 @@ class Exchange:
         self.start = start
         self.events: list[dict[str, Any]] = []
         self.omitted = 0
+        # The deciding event itself, not its index: a shared observation copies its events
+        # (the same objects) into a later clause's exchange, where they have other indices.
+        self._decided: dict[str, Any] | None = None
 
-    def add(self, now: float, direction: str, peer: str, name: str, fields: dict[str, Any]) -> None:
+    def add(self, now: float, direction: str, peer: str, name: str, fields: dict[str, Any]) -> int | None:
+        """Append an event; its index, or None if the exchange is full and it was not kept."""
         if len(self.events) >= MAX_EVENTS:
             self.omitted += 1
-            return
+            return None
         self.events.append({"t": round(now - self.start, 6), "dir": direction, "peer": peer,
                             "msg": name, "fields": fields})
+        return len(self.events) - 1
 
-    def note(self, now: float, peer: str, text: str) -> None:
-        self.add(now, "note", peer, text, {})
+    def note(self, now: float, peer: str, text: str) -> int | None:
+        return self.add(now, "note", peer, text, {})
+
+    def decide(self, event: dict[str, Any] | int | None) -> None:
+        """Make `event` (an event, or its index here) the one that decided the clause; None
+        forgets the choice. The last call before the verdict wins."""
+        if isinstance(event, int):
+            event = self.events[event] if 0 <= event < len(self.events) else None
+        self._decided = event
+
+    @property
+    def decided_by(self) -> int | None:
+        """The index of the deciding event, or None. The last copy if it occurs twice (a
+        shared observation used twice in one clause)."""
+        if self._decided is None:
+            return None
+        for index in range(len(self.events) - 1, -1, -1):
+            if self.events[index] is self._decided:
+                return index
+        return None
 
     def finish(self, now: float) -> list[dict[str, Any]]:
         if self.omitted:

@@ -7,6 +7,15 @@ check passes are the protocol's own (spec defaults) and are stretched by `--time
 
 Frames are matched from a floor (`mark()` moves it to "now") and a matched frame is
 consumed, so two `expect`s of the same request see the first copy and then the retry.
+
+Each waiting helper also records which exchange event decided the clause, so the report
+marks the message the check judged: `expect`, `poll_for` and `collect` the last frame they
+consume; an `expect` that times out, the note it writes; a `poll_for` or `collect` that
+gets nothing, the last message this tester sent (it went unanswered); a failing
+`expect_silence`, the frame that broke the silence. The last one recorded before the
+verdict is the clause's `decided_by`. A check whose verdict is about an earlier frame says
+so (`decided_by_frame`). The record lives in the clause's `Exchange` (the runner starts a
+new one per clause; both GCSs share it), not at the floor: checks `mark()` mid-clause.
 """
 
 from __future__ import annotations
@@ -26,6 +35,7 @@ from .tester_node import TesterNode
 SPEC = Timings()
 LIVENESS = 3.0   # s without any frame from the target, beyond which it is unresponsive
 KEEP_FRAMES = 100_000   # frames kept before the floor (checks may look back, e.g. for HEARTBEATs)
+KEEP_DRAWN = 50_000     # received frames remembered with their exchange event (for `decided_by`)
 
 
 class Driver(Protocol):
@@ -49,6 +59,10 @@ class Tester:
         # mission_type -> opaque_id the vehicle's last MISSION_ACK ACCEPTED gave it, to any of
         # the session's GCSs (shared between them; kept by `record_traffic`)
         self.plan_ids: dict[int, int] = {}
+        # id(frame) -> (frame, its exchange event), for every received frame an exchange
+        # kept; across clauses, since a shared observation's frames decide later clauses too
+        self._drawn: dict[int, tuple[Frame, dict[str, Any]]] = {}
+        self._sent: tuple[Exchange, dict[str, Any]] | None = None   # the last send's event
 
     # --- time -----------------------------------------------------------------------------
     def now(self) -> float:
@@ -80,9 +94,42 @@ class Tester:
         self.node.send(msg)
         self.driver.run_until(_always, timeout=0.0)   # flush it now, and take in what is waiting
 
-    def note(self, text: str) -> None:
+    def note(self, text: str) -> int | None:
+        """A note in the exchange; its index there (None if no exchange kept it)."""
+        if self.exchange is None:
+            return None
+        return self.exchange.note(self.now(), self.node.name, text)
+
+    # --- what decided the clause ----------------------------------------------------------
+    @property
+    def decided_by(self) -> int | None:
+        """The index in the current exchange of the event that decided the clause so far."""
+        return None if self.exchange is None else self.exchange.decided_by
+
+    @decided_by.setter
+    def decided_by(self, index: int | None) -> None:
         if self.exchange is not None:
-            self.exchange.note(self.now(), self.node.name, text)
+            self.exchange.decide(index)
+
+    def decided_by_frame(self, frame: Frame) -> None:
+        """The verdict is about `frame` (received by this tester), not the last frame the
+        check consumed. A frame the exchange did not keep leaves no event to mark."""
+        if self.exchange is not None:
+            drawn = self._drawn.get(id(frame))
+            self.exchange.decide(drawn[1] if drawn is not None and drawn[0] is frame else None)
+
+    def _unanswered(self) -> None:
+        """A wait got nothing: what decided is the last message this tester sent in this
+        clause (a check that knows better says so after). Nothing sent: left as it was."""
+        sent = self._sent
+        if sent is not None and self.exchange is not None and sent[0] is self.exchange:
+            self.exchange.decide(sent[1])
+
+    def _remember(self, frame: Frame, event: dict[str, Any]) -> None:
+        drawn = self._drawn
+        drawn[id(frame)] = (frame, event)   # holding the frame keeps its id from being reused
+        if len(drawn) > KEEP_DRAWN:
+            self._drawn = dict(list(drawn.items())[-(KEEP_DRAWN // 2):])
 
     def expect(self, match: Match, within: float | None = None) -> Frame:
         """The first unconsumed frame since the floor that matches, waiting at most `within`
@@ -93,9 +140,10 @@ class Tester:
             self.driver.run_until(lambda: self._find(match, peek=True) is not None, timeout=within)
             found = self._find(match)
         if found is None:
-            self.note(f"expected {match} within {within:g} s: nothing matching arrived")
+            self.decided_by = self.note(f"expected {match} within {within:g} s: nothing matching arrived")
             self._check_alive()
             raise ClauseFailed(f"expected {match} within {within:g} s; {self.last_seen()}")
+        self.decided_by_frame(found)
         return found
 
     def poll_for(self, match: Match, within: float, *, forced: bool = False) -> Frame | None:
@@ -110,6 +158,10 @@ class Tester:
             found = self._find(match)
             if forced:
                 self.forced_wait += self.now() - started
+        if found is not None:
+            self.decided_by_frame(found)
+        else:
+            self._unanswered()
         return found
 
     def wait_until(self, condition: Callable[[], bool], within: float, *, forced: bool = True) -> bool:
@@ -125,6 +177,7 @@ class Tester:
         seen = self.collect(match, for_, stop_at_first=True)
         if seen:
             t, frame = seen[0]
+            self.decided_by_frame(frame)
             # the window may follow the target's measured retry interval: both are measured
             raise ClauseFailed(Measured(f"expected no {match} for <window> s; got "
                                         f"{_describe(frame)} after <after> s",
@@ -158,7 +211,10 @@ class Tester:
             wake = end if quiet_s is None or not out else min(end, start + out[-1][0] + quiet_s)
             self.driver.run_until(lambda: self._pending(match, stop), timeout=max(0.0, wake - self.now()))
         self.forced_wait += self.now() - start
-        if not out:
+        if out:
+            self.decided_by_frame(out[-1][1])
+        else:
+            self._unanswered()
             self._check_alive()
         return out
 
@@ -248,11 +304,13 @@ def record_traffic(tester: Tester) -> None:
                 ids[mt] = getattr(msg, "opaque_id", 0)
         ex = tester.exchange
         if ex is not None and relevant(frame.msg._type):
-            ex.add(now, "rx", peer, frame.msg._type, message_fields(frame.msg))
+            index = ex.add(now, "rx", peer, frame.msg._type, message_fields(frame.msg))
+            if index is not None:
+                tester._remember(frame, ex.events[index])
 
     def on_send(peer: str, msg: Any) -> None:
         ex = tester.exchange
-        if ex is not None:
-            ex.add(tester.now(), "tx", peer, msg._type, message_fields(msg))
+        index = None if ex is None else ex.add(tester.now(), "tx", peer, msg._type, message_fields(msg))
+        tester._sent = None if index is None else (ex, ex.events[index])
 
     node.on_frame, node.on_send = on_frame, on_send

@@ -1,4 +1,4 @@
-"""Which message decided a clause, guessed from its verdict until the checks record it."""
+"""Which message decided a clause: the index its check recorded, else a guess from its verdict."""
 
 from mavconform.reports.deciding import deciding_event
 from mavconform.reports.enum_names import enum_value_name, field_value_name

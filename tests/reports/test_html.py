@@ -1,7 +1,9 @@
 import re
 from html.parser import HTMLParser
 
+from mavconform.reports.deciding import deciding_event
 from mavconform.reports.html import html_report
+from mavconform.reports.run_document import clause_detail, clause_events
 from mavconform.reports.sequence_svg import MAX_EVENTS, sequence_diagram
 
 from .sample import FAILED_ARROWS, UPLOAD_OK, event
@@ -109,6 +111,26 @@ def test_a_section_with_a_diagram_for_each_clause_not_passing(doc):
     assert "no messages exchanged" in found["MIS.FENCE.01"]
     assert "Expected deviation: PX4 answers an empty download with an error &lt;ack&gt;" \
         in found["MIS.DL.02"]
+
+
+def highlighted(body):
+    """The indices (in exchange order) of the events drawn with the "decided" class."""
+    drawn = re.findall(r'<g class="(?:arrow (?:tx|rx)|note)( decided)?">', body)
+    return [index for index, decided in enumerate(drawn) if decided]
+
+
+def test_the_event_the_check_recorded_is_the_one_highlighted(doc):
+    clause = doc["clauses"][1]   # MIS.UP.07: 7 events, notes and both testers
+    for index in (0, 4, 6):
+        clause["decided_by"] = index
+        body = sections(html_report(doc))["MIS.UP.07"]
+        assert highlighted(body) == [index]
+        assert body.count('class="decided-band"') == 1
+        assert "the event that decided the verdict (as the check recorded it)." in body
+    clause["decided_by"] = None   # none recorded: the guess from the verdict, said so
+    body = sections(html_report(doc))["MIS.UP.07"]
+    guess = deciding_event(clause, clause_events(doc, clause), clause_detail(doc, clause))
+    assert highlighted(body) == [guess] and "(as read from the verdict)." in body
 
 
 def test_passing_exchanges_are_folded(doc):

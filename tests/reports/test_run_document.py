@@ -40,6 +40,15 @@ def test_dump_refuses_nan(doc):
         dump_run(doc)
 
 
+def test_a_clause_may_say_which_event_decided_it(doc, tmp_path):
+    """`decided_by` is optional (older documents lack it), an index or null, and stable: it
+    is kept outside `volatile`, in the same format."""
+    doc["clauses"][1]["decided_by"] = 6
+    doc["clauses"][0]["decided_by"] = None
+    assert load_run(write(tmp_path, dump_run(doc)))["clauses"][1]["decided_by"] == 6
+    assert doc["format"] == FORMAT == "mavconform-run/2"
+
+
 def test_load_accepts_a_null_identity_and_capture(doc, tmp_path):
     doc["identity"] = None
     doc["capture"] = None
@@ -87,6 +96,11 @@ BAD_DOCUMENTS = [
     (("clauses", 1, "exchange", 2, "fields", "seq"), {"a": 1},
      "clauses[1].exchange[2].fields.seq: expected a string or a number or a bool or null"),
     (("clauses", 2, "id"), "MIS.UP.01", "clauses[2].id: 'MIS.UP.01' is already clauses[0]"),
+    (("clauses", 1, "decided_by"), "3", "clauses[1].decided_by: expected an integer or null"),
+    (("clauses", 1, "decided_by"), True, "clauses[1].decided_by: expected an integer or null"),
+    (("clauses", 1, "decided_by"), 7, "clauses[1].decided_by: 7 is not the index of an event in "
+                                      "the exchange (7 events)"),
+    (("clauses", 1, "decided_by"), -1, "clauses[1].decided_by: -1 is not the index of an event"),
     (("clauses", 4), "MIS.CLR.03", "clauses[4]: expected an object, found the string"),
     (("clauses",), {}, "clauses: expected an array, found an object"),
     (("tool", "version"), 1, "tool.version: expected a string, found the number 1"),
