@@ -7,14 +7,17 @@ and a report can print them; the first rule an item breaks decides the code. Whi
 commands are known is a set a profile may narrow, or a table of sets chosen by the item's
 frame (`CommandList`, as PX4's parser has), and the frames an item with a location may use
 are a set a profile may widen (`rules_for`); the spec vehicle knows every mission command of
-the upstream XML (commands.py) in any global frame or MAV_FRAME_MISSION.
+the upstream XML (commands.py) in any global frame or MAV_FRAME_MISSION. A NaN in params 1-4
+means "use the default" to the spec vehicle; a profile may say which params of which commands
+may be NaN (`param_rules`, checked before anything else, as ArduPilot does) and cap the
+altitude of a location (`altitude_rules`).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import AbstractSet, Callable, Sequence
+from typing import AbstractSet, Callable, Mapping, Sequence
 
 from .commands import LOCATION_COMMANDS
 from .constants import (
@@ -44,6 +47,9 @@ class ItemRule:
     code: MissionResult
     applies: Callable[[MissionItem], bool]
     holds: Callable[[MissionItem], bool]
+
+
+NanParams = Mapping[int, AbstractSet[int]]   # mission command -> its params (1-4) that may be NaN
 
 
 def _not_inf(v: float) -> bool:
@@ -132,7 +138,37 @@ def frame_rules(location_frames: AbstractSet[int] | None) -> tuple[ItemRule, ...
     )
 
 
-_VALUE_RULES: tuple[ItemRule, ...] = (
+def param_rules(nan_params: NanParams | None) -> tuple[ItemRule, ...]:
+    """Rules put before all others. None: none (the spec's +-inf rules come with the values,
+    and NaN is taken). A table: in a mission item, params 1-4 must be finite, or NaN where
+    the table lists that param for the item's command; the first bad one gives
+    INVALID_PARAMn, whatever else is wrong with the item (ArduPilot's sanity_check_params)."""
+    if nan_params is None:
+        return ()
+    table = {command: frozenset(params) for command, params in nan_params.items()}
+
+    def ok(n: int) -> Callable[[MissionItem], bool]:
+        def holds(it: MissionItem) -> bool:
+            v = _param(n)(it)
+            return math.isfinite(v) or (math.isnan(v) and n in table.get(it.command, ()))
+        return holds
+
+    return tuple(ItemRule(f"param{n} finite, NaN only where the command takes it", _PARAM_CODES[n],
+                          _in_mission, ok(n)) for n in (1, 2, 3, 4))
+
+
+def altitude_rules(location_alt_max: float | None) -> tuple[ItemRule, ...]:
+    """None: none beyond the spec's finite altitude of a destination. A number (m): a mission
+    item whose command has a location (the XML's hasLocation) needs a finite z below it in
+    magnitude, else INVALID_PARAM7."""
+    if location_alt_max is None:
+        return ()
+    return (ItemRule(f"location altitude finite and below {location_alt_max:g} m", MissionResult.INVALID_PARAM7,
+                     lambda it: _in_mission(it) and it.command in LOCATION_COMMANDS,
+                     lambda it: math.isfinite(it.z) and abs(it.z) < location_alt_max),)
+
+
+_FIELD_RULES: tuple[ItemRule, ...] = (
     ItemRule("current and autocontinue are 0 or 1", MissionResult.INVALID,
              lambda it: True, lambda it: it.current in (0, 1) and it.autocontinue in (0, 1)),
     *(ItemRule(f"param{n} is not infinite", _PARAM_CODES[n],
@@ -145,6 +181,8 @@ _VALUE_RULES: tuple[ItemRule, ...] = (
              lambda it: -1_800_000_000 <= it.y <= 1_800_000_000),
     ItemRule("altitude finite", MissionResult.INVALID_PARAM7,
              _positional, lambda it: math.isfinite(it.z)),
+)
+_COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (
     ItemRule("waypoint hold time >= 0", MissionResult.INVALID_PARAM1,
              lambda it: it.command == Cmd.NAV_WAYPOINT,
              lambda it: math.isnan(it.param1) or it.param1 >= 0),
@@ -165,10 +203,14 @@ _VALUE_RULES: tuple[ItemRule, ...] = (
 
 
 def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
-              location_frames: AbstractSet[int] | None = None) -> tuple[ItemRule, ...]:
+              location_frames: AbstractSet[int] | None = None,
+              nan_params: NanParams | None = None,
+              location_alt_max: float | None = None) -> tuple[ItemRule, ...]:
     """The spec rules with another set (or frame table) of mission commands (None: any
-    command, see `command_rules`) and other frames for items with a location (`frame_rules`)."""
-    return (*command_rules(mission_commands), *frame_rules(location_frames), *_VALUE_RULES)
+    command, see `command_rules`), other frames for items with a location (`frame_rules`),
+    params that may be NaN (`param_rules`) and an altitude cap (`altitude_rules`)."""
+    return (*param_rules(nan_params), *command_rules(mission_commands), *frame_rules(location_frames),
+            *_FIELD_RULES, *altitude_rules(location_alt_max), *_COMMAND_VALUE_RULES)
 
 
 SPEC_RULES: tuple[ItemRule, ...] = rules_for(MISSION_COMMANDS)

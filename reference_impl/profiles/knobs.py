@@ -161,6 +161,29 @@ def _mission_commands(v: Any) -> frozenset[int] | tuple[CommandList, ...]:
     return tuple(table)
 
 
+def _nan_params(v: Any) -> dict[int, frozenset[int]]:
+    """nan_params = {COMMAND = [params], ...}: the params (1-4) of each mission command (a
+    MAV_CMD name, or its number quoted) that may be NaN; {} = none may."""
+    if not isinstance(v, dict):
+        raise ValueError(f"expected a table of MAV_CMD names -> lists of params 1-4, got {v!r}")
+    table: dict[int, frozenset[int]] = {}
+    for key, params in v.items():
+        command = _command_value(int(key) if key.isdigit() else key)
+        if command in table:
+            raise ValueError(f"{key!r}: command {command} is listed twice")
+        try:
+            table[command] = frozenset(_values(params, "params 1-4", _count(1, 4)))
+        except ValueError as exc:
+            raise ValueError(f"{key}: {exc}") from None
+    return table
+
+
+def _metres(v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+        raise ValueError(f"expected a number of metres > 0, got {v!r}")
+    return float(v)
+
+
 _KNOBS = (
     # timings
     Knob("default_timeout", TIMINGS, "default_timeout", _seconds, "s: response timeout (spec 1.5)"),
@@ -183,6 +206,13 @@ _KNOBS = (
          "frames a mission item whose command has a location may use (others: UNSUPPORTED_FRAME); "
          "the frame of an item without one is not checked (default: global frames or "
          "MAV_FRAME_MISSION for every item, a global frame for a destination)"),
+    Knob("nan_params", RULES, "nan_params", _nan_params,
+         "which params (1-4) of which mission commands may be NaN ({COMMAND = [params]}); any other "
+         "NaN, and +-inf in any, gets INVALID_PARAMn (the first bad n) before any other check "
+         "(default: NaN anywhere means \"use the default\"; +-inf refused after command and frame)"),
+    Knob("location_alt_max", RULES, "location_alt_max", _metres,
+         "m: a mission item whose command has a location needs a finite altitude below this in "
+         "magnitude (else INVALID_PARAM7; default: a destination's altitude need only be finite)"),
     Knob("idle_reply", BEHAVIOUR, "idle_reply", _result_or_none, "MISSION_ACK for a stray item/request in idle (\"none\": silence)"),
     Knob("reack_last_item", BEHAVIOUR, "reack_last_item", _bool, "a late copy of the last item draws ACCEPTED again"),
     Knob("notify_upload_give_up", BEHAVIOUR, "notify_upload_give_up", _bool,

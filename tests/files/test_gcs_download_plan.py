@@ -19,7 +19,8 @@ from mavconform.reference_impl.wire.dialect import mavlink as _d
 from ..vehicle_process import vehicle_process
 from . import qgc_loader
 
-SOURCE = Path(__file__).parent / "fixtures" / "roi_camera_gimbal.plan"
+# The ArduPilot form: no null (NaN) params where ArduPilot refuses them (A23).
+SOURCE = Path(__file__).parent / "fixtures" / "roi_camera_gimbal_ardupilot.plan"
 
 
 @pytest.mark.udp

@@ -20,6 +20,7 @@ from mavconform.reference_impl.files import load_plan, plan_from_items, save_pla
 from mavconform.reference_impl.files.from_vehicle import facts_from_gcs
 from mavconform.reference_impl.files.qgc_plan import fallback_home
 from mavconform.reference_impl.interop.harness import build_pair, expected_plan
+from mavconform.reference_impl.mission.commands import by_name
 from mavconform.reference_impl.mission.constants import Cmd, MissionResult
 from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
@@ -31,8 +32,13 @@ FIXTURES = sorted((Path(__file__).parent / "fixtures").glob("*.plan"))
 # (mavlink_mission.cpp parse_mavlink_mission_item: MAV_MISSION_UNSUPPORTED_FRAME), and QGC
 # offers that frame (AltitudeMode 4, TerrainFrame) only for ArduPilot. Its terrain-relative
 # mode for PX4 is AltitudeMode 3 (CalcAboveTerrain: an AMSL altitude in MAV_FRAME_GLOBAL),
-# which terrain_calc_above_terrain.plan carries and every profile takes.
-REFUSED = {("terrain_null_altitude", "px4"): MissionResult.UNSUPPORTED_FRAME}
+# which terrain_calc_above_terrain.plan carries and every profile takes. ArduPilot refuses a
+# NaN (a .plan's null) in a param its command takes no NaN in (A23, AP_Mission.cpp
+# sanity_check_params; ArduCopter SITL 531699d6 answered INVALID_PARAM3 to roi_camera_gimbal's
+# DO_GIMBAL_MANAGER_PITCHYAW with null pitch and yaw rates); roi_camera_gimbal_ardupilot.plan
+# has 0 there, so ROI, camera and gimbal items still go up to every profile.
+REFUSED = {("terrain_null_altitude", "px4"): MissionResult.UNSUPPORTED_FRAME,
+           ("roi_camera_gimbal", "ardupilot"): MissionResult.INVALID_PARAM3}
 
 
 @pytest.mark.parametrize("profile_name", BUILTIN_PROFILES)
@@ -77,3 +83,12 @@ def test_fixture_goes_up_and_comes_back(profile_name: str, source: Path, tmp_pat
         assert back.home == (vehicle_home.lat, vehicle_home.lon, vehicle_home.alt)
     else:                                   # no HOME_POSITION from our vehicle: QGC's guess
         assert back.home == fallback_home(back.mission)
+
+
+def test_roi_camera_and_gimbal_items_go_up_to_every_profile() -> None:
+    """The fixtures every builtin profile takes hold an ROI, a gimbal and a camera item."""
+    wanted = {by_name(n).value for n in ("DO_SET_ROI_LOCATION", "DO_GIMBAL_MANAGER_PITCHYAW", "IMAGE_START_CAPTURE")}
+    for name in BUILTIN_PROFILES:
+        taken = [s.stem for s in FIXTURES
+                 if (s.stem, name) not in REFUSED and wanted <= {it.command for it in load_plan(s).mission}]
+        assert taken, f"{name} takes no fixture with ROI, gimbal and camera items"
