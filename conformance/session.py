@@ -179,16 +179,20 @@ class Session:
         its exchange copied into every clause that uses it, so each keeps its evidence."""
         exchange = self.t.exchange
         if key in self.cache:
-            value, events, owner = self.cache[key]
+            value, events, owner, decided = self.cache[key]
             if exchange is not None:
                 exchange.note(self.t.now(), "tester", f"the exchange below was recorded for {owner} "
                               "and is shared with this clause (times are from that clause)")
                 exchange.events.extend(events)
+                if decided is not None:   # what the observation judged, until the clause says otherwise
+                    exchange.decide(decided)
             return value
         first = len(exchange.events) if exchange is not None else 0
         value = observe()
         events = list(exchange.events[first:]) if exchange is not None else []
-        self.cache[key] = (value, events, self.current_clause)
+        index = exchange.decided_by if exchange is not None else None
+        decided = exchange.events[index] if index is not None and index >= first else None
+        self.cache[key] = (value, events, self.current_clause, decided)
         return value
 
     def testers(self) -> list[Tester]:

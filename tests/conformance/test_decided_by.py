@@ -116,3 +116,10 @@ def test_the_run_document_keeps_it_and_run_html_highlights_exactly_that_event() 
     for clause_id, clause in clauses.items():
         assert _highlighted(text, clause_id) == [clause["decided_by"]], clause_id
     assert "(as the check recorded it)" in text and "(as read from the verdict)" not in text
+
+
+def test_a_clause_that_reuses_a_shared_observation_is_decided_where_the_observation_was() -> None:
+    results = _run("builtin:spec", "MIS.UP.06", "MIS.UP.09")
+    reused = _decider(results["MIS.UP.09"])   # UP.09 waits for nothing itself
+    assert any(e is reused for e in results["MIS.UP.06"].exchange)   # the observation's own event
+    assert reused["dir"] == "rx"
