@@ -112,6 +112,8 @@ COMMANDS_TRIED = (16, 18, 115, 176, 183, 195, 206, 1000, 2000, 31999)
 SEEN_ON_PX4 = {16: (OK, "not tried"), 18: (U, U), 115: (U, U), 176: (U, U), 183: (U, U),
                195: (OK, U), 206: (U, OK), 1000: (U, OK), 2000: (U, OK), 31999: (U, U)}
 SEEN_ON_ARDUPILOT = {c: (OK, OK) for c in COMMANDS_TRIED} | {176: (U, U), 31999: (U, U)}
+# ... and four more cases of AP_Mission's switch, tried in frame 3 only (param1 0 and 1 alike)
+SEEN_ON_ARDUPILOT |= {c: (OK, "not tried") for c in (36, 188, 600, 601)}
 SEEN = [(profile, command, frame, answers[i])
         for profile, table in (("px4", SEEN_ON_PX4), ("ardupilot", SEEN_ON_ARDUPILOT))
         for command, answers in table.items() for i, frame in enumerate((3, 2))
