@@ -8,12 +8,9 @@ import pytest
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
 from mavconform.reference_impl.profiles import load_profile
+from .profile_files import write_profile as _write
 
 
-def _write(tmp_path, text: str, name: str = "mine.toml"):
-    path = tmp_path / name
-    path.write_text(text)
-    return str(path)
 
 
 def test_a_user_profile_overrides_a_knob_of_its_base(tmp_path) -> None:

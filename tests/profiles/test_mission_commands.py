@@ -16,6 +16,7 @@ from mavconform.reference_impl.mission.validation import first_defect
 from mavconform.reference_impl.profiles import load_profile
 
 from ..rigs import vehicle_and_gcs
+from .profile_files import write_profile as _write
 
 # What QGroundControl puts in a survey or an inspection mission besides waypoints.
 QGC_COMMANDS = ("DO_SET_ROI_LOCATION", "DO_SET_ROI_NONE", "DO_SET_CAM_TRIGG_DIST",
@@ -58,10 +59,6 @@ def test_the_narrowed_sets_cite_their_source_and_stay_mission_commands() -> None
         assert named <= PLAN_COMMANDS, sorted(named - PLAN_COMMANDS)
 
 
-def _write(tmp_path, text: str) -> str:
-    path = tmp_path / "mine.toml"
-    path.write_text(text)
-    return str(path)
 
 
 def test_a_user_profile_narrows_or_reopens_the_set(tmp_path) -> None:

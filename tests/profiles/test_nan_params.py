@@ -17,6 +17,7 @@ from mavconform.reference_impl.mission.validation import ItemRule, first_defect
 from mavconform.reference_impl.profiles import load_profile
 
 from ..rigs import vehicle_and_gcs
+from .profile_files import write_profile as _write
 
 NAN, INF = float("nan"), float("inf")
 PARAM = {1: MissionResult.INVALID_PARAM1, 2: MissionResult.INVALID_PARAM2,
@@ -164,10 +165,6 @@ def test_spec_and_px4_need_a_finite_destination_altitude_only(profile: str) -> N
 
 # --- profile files --------------------------------------------------------------------------
 
-def _write(tmp_path, text: str) -> str:
-    path = tmp_path / "mine.toml"
-    path.write_text(text)
-    return str(path)
 
 
 def test_a_user_profile_writes_its_own_mask(tmp_path) -> None:
