@@ -8,9 +8,8 @@ import pytest
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
 from mavconform.reference_impl.profiles import load_profile
+
 from .profile_files import write_profile as _write
-
-
 
 
 def test_a_user_profile_overrides_a_knob_of_its_base(tmp_path) -> None:

@@ -59,8 +59,6 @@ def test_the_narrowed_sets_cite_their_source_and_stay_mission_commands() -> None
         assert named <= PLAN_COMMANDS, sorted(named - PLAN_COMMANDS)
 
 
-
-
 def test_a_user_profile_narrows_or_reopens_the_set(tmp_path) -> None:
     path = _write(tmp_path, 'name = "survey-only"\nbase = "px4"\n[[knob]]\nknob = "mission_commands"\n'
                             'value = ["NAV_WAYPOINT", "MAV_CMD_NAV_TAKEOFF", 2000]\n')

@@ -166,7 +166,6 @@ def test_spec_and_px4_need_a_finite_destination_altitude_only(profile: str) -> N
 # --- profile files --------------------------------------------------------------------------
 
 
-
 def test_a_user_profile_writes_its_own_mask(tmp_path) -> None:
     path = _write(tmp_path, 'name = "strict"\nbase = "spec"\n[[knob]]\nknob = "nan_params"\n'
                             'value = { MAV_CMD_NAV_LOITER_TIME = [4], "1000" = [3, 4] }\n')
