@@ -31,7 +31,7 @@ from ..vehicle_process import vehicle_process
 
 REPORTS = ("run.json", "run.junit.xml", "run.md", "run.html", "run.mcap")
 DEMO = str(SAMPLES_DIR / "demo.plan")
-DECIDED = re.compile(r"^  (PASS|FAIL|KNOWN|N/A|SKIP|ERROR) +(\S+)", re.M)
+DECIDED = re.compile(r"^  (PASS|FAIL|KNOWN|N/A|SKIP|ERROR) +(?P<id>\S+)", re.M)
 WAIT = 60.0   # s: the bound on every wait below (the vehicle process lives 60 s)
 
 
@@ -41,11 +41,27 @@ def _download(target: str, path: Path, capsys) -> tuple:
     return plan.mission, plan.fence, plan.rally
 
 
-def _await_decided(out: Path, proc: subprocess.Popen, count: int) -> list[str]:
+def sigterm_after(argv: list[str], out: Path, count: int, pattern: re.Pattern = DECIDED,
+                  **popen: object) -> tuple[int, list[str]]:
+    """Run `argv` (stdout to `out`), SIGTERM it once it has printed `count` decided clauses
+    (`pattern`'s group "id"); its exit code and those ids. Every wait bounded."""
+    with out.open("w") as stdout:
+        proc = subprocess.Popen(argv, stdout=stdout, **popen)
+        try:
+            decided = _await_decided(out, proc, count, pattern)
+            proc.send_signal(signal.SIGTERM)
+            return proc.wait(timeout=WAIT), decided
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(timeout=10)
+
+
+def _await_decided(out: Path, proc: subprocess.Popen, count: int, pattern: re.Pattern) -> list[str]:
     """The ids of the first `count` clauses the run printed as decided (bounded wait)."""
     deadline = time.monotonic() + WAIT
     while time.monotonic() < deadline:
-        decided = [m.group(2) for m in DECIDED.finditer(out.read_text())]
+        decided = [m.group("id") for m in pattern.finditer(out.read_text())]
         if len(decided) >= count:
             return decided
         assert proc.poll() is None, f"the run ended first: {out.read_text()}"
@@ -68,17 +84,9 @@ def test_sigterm_restores_the_target_writes_every_report_and_marks_the_run(tmp_p
         assert main(["gcs", "upload", "--target", target, DEMO]) == 0
         before = _download(target, tmp_path / "before.plan", capsys)
         assert all(before), "the vehicle should hold a mission, a fence and rally points"
-        with out.open("w") as stdout, err.open("w") as stderr:
-            proc = subprocess.Popen([sys.executable, "-m", "mavconform", "run", "--target", target,
-                                     "--report-dir", str(reports)], stdout=stdout, stderr=stderr)
-            try:
-                decided = _await_decided(out, proc, 3)
-                proc.send_signal(signal.SIGTERM)
-                code = proc.wait(timeout=WAIT)
-            finally:
-                if proc.poll() is None:
-                    proc.kill()
-                    proc.wait(timeout=10)
+        with err.open("w") as stderr:
+            code, decided = sigterm_after([sys.executable, "-m", "mavconform", "run", "--target", target,
+                                           "--report-dir", str(reports)], out, 3, stderr=stderr)
         after = _download(target, tmp_path / "after.plan", capsys)
     assert code == 130, out.read_text() + err.read_text()
     assert after == before

@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import json
 import re
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -16,10 +14,10 @@ import pytest
 from mavconform.reports import check_run
 
 from ..vehicle_process import vehicle_process
-from .test_interrupted_run import DEMO, WAIT, _download
+from .test_interrupted_run import DEMO, _download, sigterm_after
 
 pytestmark = pytest.mark.udp
-DECIDED = re.compile(r"test_clause\[(\S+)\] (PASSED|FAILED|SKIPPED|XFAIL)")
+DECIDED = re.compile(r"test_clause\[(?P<id>\S+)\] (PASSED|FAILED|SKIPPED|XFAIL)")
 
 
 def test_sigterm_to_the_pytest_plugin_restores_and_reports(tmp_path: Path, capsys) -> None:
@@ -29,22 +27,10 @@ def test_sigterm_to_the_pytest_plugin_restores_and_reports(tmp_path: Path, capsy
         target = f"udp:127.0.0.1:{port}"
         assert main(["gcs", "upload", "--target", target, DEMO]) == 0
         before = _download(target, tmp_path / "before.plan", capsys)
-        with out.open("w") as stdout:
-            proc = subprocess.Popen([sys.executable, "-m", "pytest", "-v", "-p", "no:cacheprovider", "--pyargs",
-                                     "mavconform.conformance", "--mavlink-target", target,
-                                     "--mavlink-report-dir", str(reports)],
-                                    stdout=stdout, stderr=subprocess.STDOUT, cwd=tmp_path)
-            try:
-                deadline = time.monotonic() + WAIT
-                while len(DECIDED.findall(out.read_text())) < 3:
-                    assert proc.poll() is None and time.monotonic() < deadline, out.read_text()
-                    time.sleep(0.02)
-                proc.send_signal(signal.SIGTERM)
-                code = proc.wait(timeout=WAIT)
-            finally:
-                if proc.poll() is None:
-                    proc.kill()
-                    proc.wait(timeout=10)
+        code, _ = sigterm_after([sys.executable, "-m", "pytest", "-v", "-p", "no:cacheprovider", "--pyargs",
+                                 "mavconform.conformance", "--mavlink-target", target,
+                                 "--mavlink-report-dir", str(reports)],
+                                out, 3, DECIDED, stderr=subprocess.STDOUT, cwd=tmp_path)
         after = _download(target, tmp_path / "after.plan", capsys)
     assert code == pytest.ExitCode.INTERRUPTED, out.read_text()
     assert after == before
@@ -53,4 +39,4 @@ def test_sigterm_to_the_pytest_plugin_restores_and_reports(tmp_path: Path, capsy
     assert doc["run"]["interrupted"] is True and doc["run"]["interrupted_by"] == "SIGTERM"
     assert doc["summary"]["verdict"] == "interrupted" and doc["summary"]["skipped"] > 0
     assert doc["restore"]["status"] in ("restored", "unchanged")
-    assert {c["id"] for c in doc["clauses"]} >= {cid for cid, _ in DECIDED.findall(out.read_text())}
+    assert {c["id"] for c in doc["clauses"]} >= {m.group("id") for m in DECIDED.finditer(out.read_text())}
