@@ -46,6 +46,7 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
     failing = sum(1 for flag in gating_flags.values() if flag)
     identity = None if run.identity is None else dict(run.identity)
     address = identity.pop("address", None) if identity is not None else None
+    measured_identity = _measured_identity(identity)
     clauses, per_clause = [], {}
     for r in run.results:
         clauses.append(_clause(r, gating_flags.get(r.clause_id, False)))
@@ -70,8 +71,21 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
         "volatile": {"started": started.strftime("%Y-%m-%dT%H:%M:%SZ"),
                      "duration_s": round(run.duration_s, 3),
                      "forced_wait_s": round(run.forced_wait_s, 3),
-                     "address": address, "clauses": per_clause},
+                     "address": address, "clauses": per_clause,
+                     **({"identity": measured_identity} if measured_identity else {})},
     }
+
+
+def _measured_identity(identity: dict[str, Any] | None) -> dict[str, dict[str, str]]:
+    """Replace each measured identity text (the readiness line: how long the target took to
+    boot) by its stable form; return the numbers, for volatile.identity."""
+    values = {}
+    for key, value in (identity or {}).items():
+        if isinstance(value, Measured):
+            identity[key] = value.stable
+            if value.values:
+                values[key] = dict(value.values)
+    return values
 
 
 def _clause(r: ClauseResult, gating: bool) -> dict[str, Any]:

@@ -19,6 +19,7 @@ from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 from .harness import plans, procedures
 from .harness.match import msg
+from .harness.measured import Measured
 from .harness.tester import Tester
 
 INTERVAL_US = 1_000_000            # 1 Hz, the rate the spec names for MISSION_CURRENT
@@ -36,7 +37,13 @@ class Readiness:
     waited_s: float = 0.0          # the target's boot, forced
 
     def line(self) -> str:
-        return "; ".join(self.streams + [self.ready])
+        """One line for the report. How long the target took to boot is measured, so it is a
+        `Measured` text: the run document keeps it apart in its volatile section."""
+        parts = self.streams + [self.ready]
+        values: dict[str, str] = {}
+        for part in parts:
+            values.update(getattr(part, "values", {}))
+        return Measured("; ".join(getattr(part, "stable", part) for part in parts), **values)
 
 
 def prepare(t: Tester) -> Readiness:
@@ -69,12 +76,15 @@ def _await_uploads(t: Tester) -> str:
         if frame is None:
             return "upload probe: no MISSION_ACK (the clauses judge that)"
         if frame.msg.type != MissionResult.NO_SPACE:
-            waited = "" if not refused else f" after {refused} NO_SPACE refusal(s) in {t.now() - opened:.1f} s"
-            return f"upload probe: {procedures.result_name(frame.msg.type)}{waited}"
+            said = f"upload probe: {procedures.result_name(frame.msg.type)}"
+            if not refused:
+                return said
+            return Measured(said + " after <boot_refusals> NO_SPACE refusal(s) in <boot_wait>",
+                            boot_refusals=str(refused), boot_wait=f"{t.now() - opened:.1f} s")
         refused += 1
         if t.now() - opened > READY_WAIT * t.scale:
             break
         t.wait_until(lambda: False, READY_RETRY)
-    return (f"upload probe: still NO_SPACE after {t.now() - opened:.1f} s; the target may not be done "
-            "booting")
+    return Measured("upload probe: still NO_SPACE after <boot_wait>; the target may not be done booting",
+                    boot_wait=f"{t.now() - opened:.1f} s")
 

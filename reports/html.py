@@ -216,8 +216,8 @@ def _fact_rows(doc: dict[str, Any]) -> list[tuple[str, str]]:
         shown = "none" if value is None else value if isinstance(value, str) else value_text(value)
         facts.append((_RUN_LABELS.get(key, key), shown))
     for key, label in (("stored_form", "plans compared as"), ("prepared", "target prepared")):
-        if (identity or {}).get(key):
-            facts.append((label, identity[key]))
+        if rd.identity_fact(doc, key):
+            facts.append((label, rd.identity_fact(doc, key)))
     if run.get("interrupted"):
         facts.append(("interrupted", " ".join(
             ["yes"] + ([f"by {run['interrupted_by']}"] if run.get("interrupted_by") else [])

@@ -29,6 +29,8 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
                 detail, expectation, exchange: [{dir: tx|rx|note, peer, msg, fields}],
                 [decided_by: index in exchange of the event the check judged last, or null]}]
     volatile  {started, duration_s, forced_wait_s (or null), address (the target's, or null),
+               [identity: {KEY: {name: text}}],                  an identity text's <name>s
+                                                                 (how long the target booted)
                clauses: {ID: {duration_s, events: [t, ...],      one t per exchange event:
                                                                  s from the clause's start
                               [detail: {name: text}],            the detail's <name>s
@@ -401,6 +403,9 @@ class _Checker:
             (self.key if key in ("started", "duration_s") else self.optional)(
                 volatile, key, "volatile", *kinds)
         self.duration(volatile, "volatile")
+        if "identity" in volatile:
+            for key, values in self.value(volatile["identity"], "volatile.identity", ("object",)).items():
+                self.values(values, f"volatile.identity.{key}")
         per_clause = self.key(volatile, "clauses", "volatile", "object")
         by_id = {clause["id"]: clause for clause in clauses}
         for clause_id in per_clause:
@@ -488,6 +493,14 @@ def clause_detail(doc: dict[str, Any], clause: dict[str, Any]) -> str:
 def clause_duration(doc: dict[str, Any], clause: dict[str, Any]) -> float | None:
     """How long the clause took, in seconds; None if the document does not say."""
     return _volatile_clause(doc, clause).get("duration_s", clause.get("duration_s"))
+
+
+def identity_fact(doc: dict[str, Any], key: str) -> Any:
+    """identity[key] as a person reads it: measured numbers in its text put back."""
+    value = (doc.get("identity") or {}).get(key)
+    if not isinstance(value, str):
+        return value
+    return fill(value, ((doc.get("volatile") or {}).get("identity") or {}).get(key, {}))
 
 
 def run_facts(doc: dict[str, Any]) -> dict[str, Any]:

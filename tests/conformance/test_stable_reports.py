@@ -12,13 +12,15 @@ from pathlib import Path
 import pytest
 
 from mavconform.cli import main
-from mavconform.conformance import document, gating
+from mavconform.conformance import document, gating, readiness
 from mavconform.conformance.expectations import Deviation
 from mavconform.conformance.harness.measured import Measured
 from mavconform.conformance.outcome import Outcome
 from mavconform.conformance.runner import DecidedResult, RunOutcome
+from mavconform.reports.write import write_reports
 from mavconform.reports.run_document import (check_run, clause_detail, clause_duration,
-                                             clause_events, load_run, run_facts)
+                                             clause_events, identity_fact, load_run,
+                                             run_facts)
 
 pytestmark = pytest.mark.udp
 
@@ -130,6 +132,33 @@ def test_an_expectation_that_rewords_a_detail_leaves_its_numbers_apart() -> None
     clause = doc["clauses"][0]
     assert clause["detail"].endswith("expected no X for <window> s; got Y after <after> s")
     assert clause_detail(doc, clause) == result.detail
+
+
+def test_how_long_the_target_took_to_boot_is_volatile(tmp_path) -> None:
+    """A SITL that answers NO_SPACE while it boots makes the readiness line say how long it
+    waited ("... after 3 NO_SPACE refusal(s) in 3.2 s"): the identity keeps the stable text,
+    volatile.identity the numbers, and run.html shows them put back."""
+    ready = Measured("upload probe: MAV_MISSION_ACCEPTED after <boot_refusals> NO_SPACE refusal(s) "
+                     "in <boot_wait>", boot_refusals="3", boot_wait="3.2 s")
+    line = readiness.Readiness(["MISSION_CURRENT at 1 Hz: accepted"], ready).line()
+    assert line == ("MISSION_CURRENT at 1 Hz: accepted; upload probe: MAV_MISSION_ACCEPTED after 3 "
+                    "NO_SPACE refusal(s) in 3.2 s")
+    result = DecidedResult("MIS.UP.01", Outcome.PASS, "ok", 0.5, [])
+    flags, summary = gating.gate([result], strict=False, baseline=None)
+    docs = [document.build(document.RunOptions("udp:127.0.0.1:1"), RunOutcome(
+        [result], {"system": 1, "component": 1, "prepared": readiness.Readiness(
+            ["MISSION_CURRENT at 1 Hz: accepted"], Measured(ready.stable, boot_refusals=n, boot_wait=w)).line()},
+        {"status": "skipped", "detail": ""}, 1.5, 0.0), started=dt.datetime(2026, 1, 1),
+        gating_flags=flags, gating=summary, capture=None) for n, w in (("3", "3.2 s"), ("1", "1.1 s"))]
+    for doc in docs:
+        check_run(doc)
+    assert _stable(docs[0]) == _stable(docs[1])
+    assert docs[0]["identity"]["prepared"].endswith("after <boot_refusals> NO_SPACE refusal(s) in <boot_wait>")
+    assert docs[0]["volatile"]["identity"] == {"prepared": {"boot_refusals": "3", "boot_wait": "3.2 s"}}
+    assert identity_fact(docs[0], "prepared") == line
+    write_reports(docs[0], tmp_path)
+    html = (tmp_path / "run.html").read_text()
+    assert "refusal(s) in 3.2 s" in html and "boot_wait" not in html
 
 
 # --- JUnit: <failure> only for what fails the run -------------------------------------------
