@@ -24,6 +24,19 @@ from mavconform.reference_impl.errors import UsageError
 
 FORMAT = "mavconform-fuzz-case/1"
 MODES = ("protocol", "frames")
+# One-way latency of every simulated link an in-process campaign runs over: a reply then
+# comes after its request, as on a real link, so a finding's diagram reads in time, not all
+# at one instant. A case records it (`found_by.latency`); a case saved before it existed has
+# none and replays as it was found, over links with no latency.
+LINK_LATENCY = 0.01
+
+
+def case_latency(found_by: dict[str, Any]) -> float:
+    """The link latency a saved case was found with (0 for cases older than `LINK_LATENCY`)."""
+    latency = found_by.get("latency", 0.0)
+    if isinstance(latency, bool) or not isinstance(latency, (int, float)) or not 0 <= latency <= 1:
+        raise UsageError(f"found_by.latency: expected seconds in [0, 1], got {latency!r:.40}")
+    return float(latency)
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from hypothesis.errors import HypothesisException
 
 from mavconform.conformance.target_uri import TargetUri, parse_target
-from mavconform.fuzz.case import Case, Violation
+from mavconform.fuzz.case import LINK_LATENCY, Case, Violation, case_latency
 from mavconform.fuzz.outcomes import (SearchInterrupted, TargetUnresponsive, ToolError, ToolFailure,
                                       caused_by_interrupt)
 from mavconform.reference_impl.errors import UsageError
@@ -199,7 +199,7 @@ class FrameCampaign:
 
     # --- one example ----------------------------------------------------------------------
     def _virtual_example(self, signing: bool, program: list[list[FrameSpec]]) -> tuple[list, Violation | None]:
-        rig = Rig(self.uri, seed=self.seed, signing=signing, virtual=True)
+        rig = Rig(self.uri, seed=self.seed, signing=signing, virtual=True, latency=LINK_LATENCY)
         steps: list[dict[str, Any]] = [setup_step(signing)]
         violation = rig.start()
         if violation is None:
@@ -269,7 +269,8 @@ class FrameCampaign:
     def _case(self, steps: list[dict[str, Any]], violation: Violation, *, shrunk: bool) -> Case:
         return Case(MODE, self.target, self.seed, tuple(steps), violation,
                     {"campaign_seed": self.seed, "examples": self.examples, "frames": self.frames_sent,
-                     "transport": "virtual" if self.virtual else "udp", "shrunk": shrunk})
+                     "transport": "virtual" if self.virtual else "udp", "shrunk": shrunk,
+                     **({"latency": LINK_LATENCY} if self.virtual else {})})
 
 
 def _frames(steps: list[dict[str, Any]]) -> int:
@@ -318,7 +319,8 @@ def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | Non
     signing, datagrams = _parse_steps(case)
     if signing and uri.kind != "builtin":
         raise UsageError(f"frames case: a signing vehicle exists only for builtin targets, not {case.target}")
-    rig = Rig(uri, seed=case.seed, signing=signing, virtual=uri.in_process, capture=capture)
+    rig = Rig(uri, seed=case.seed, signing=signing, virtual=uri.in_process, capture=capture,
+              latency=case_latency(case.found_by))
     try:
         violation = rig.start()
         if violation is not None:

@@ -48,6 +48,7 @@ from mavconform.reference_impl.errors import LocalProtocolError
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
 from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionType
 from mavconform.reference_impl.net.clock import MonotonicClock, SimClock
+from mavconform.reference_impl.net.faults import FaultModel
 from mavconform.reference_impl.net.guard import GuardedNode
 from mavconform.reference_impl.net.node import Address
 from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
@@ -167,7 +168,7 @@ class Rig:
 
     def __init__(self, uri: TargetUri, *, seed: int, signing: bool = False, virtual: bool = True,
                  capture: CaptureHook | None = None, scale: float = 1.0,
-                 profile: str | None = None) -> None:
+                 profile: str | None = None, latency: float = 0.0) -> None:
         self.profile = profile   # a UDP target's stored form: this profile's (None: from its HEARTBEAT)
         if virtual and not uri.in_process:
             raise ValueError("virtual time needs an in-process target")
@@ -205,7 +206,8 @@ class Rig:
             self.station = _Station(self.gcs, "vehicle")
             self.driver.add_node("vehicle", self.counted)
             self.driver.add_node("gcs", self.station)
-            self.driver.connect("gcs", "vehicle")
+            link = FaultModel(delay=latency)   # one-way latency, each direction (fuzz/case.py)
+            self.driver.connect("gcs", "vehicle", a_to_b=link, b_to_a=link.copy())
             self.vehicle.endpoint.add_address("gcs")
             self.gcs.endpoint.add_address("vehicle")
         else:

@@ -26,7 +26,7 @@ from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, ru
 
 from mavconform.fuzz import strategies as fs
 
-from ..case import Violation
+from ..case import LINK_LATENCY, Violation
 from ..outcomes import DEATH_KINDS, ToolFailure
 from .connection import TargetConnection
 from .steps import Runner
@@ -128,7 +128,7 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
             if not _spent():   # past the budget the example is empty: no world to open
                 self._guarded(lambda: setattr(self, "runner", Runner(
                     knobs.target, seed, atomic=knobs.atomic, connection=shared.connection,
-                    profile=knobs.profile)))
+                    profile=knobs.profile, latency=LINK_LATENCY)))
 
         def _do(self, step: dict[str, Any]) -> None:
             if _spent() or self.runner is None:

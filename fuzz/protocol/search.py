@@ -35,7 +35,7 @@ from mavconform.conformance.target_uri import parse_target
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
-from ..case import Case, Violation
+from ..case import LINK_LATENCY, Case, Violation, case_latency
 from ..outcomes import SearchInterrupted, ToolError, caused_by_interrupt, raised_while_handling
 from .connection import TargetConnection
 from .machine import CampaignOver, CampaignState, Finding, Knobs, machine_class
@@ -146,7 +146,7 @@ def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | Non
     if profile is not None and not isinstance(profile, str):
         raise UsageError(f"found_by.profile: expected a profile name or file, got {profile!r:.40}")
     runner = Runner(case.target, case.seed, capture=capture, atomic=case.found_by.get("atomic"),
-                    profile=profile)
+                    profile=profile, latency=case_latency(case.found_by))
     mark = getattr(capture, "mark", None)   # a capture that labels where each step starts
     try:
         for i, step in enumerate(case.steps):
@@ -241,6 +241,8 @@ def _case(found: Finding, knobs: Knobs, seed: int, chunk: int, examples: int) ->
         found_by["atomic"] = knobs.atomic
     if knobs.profile is not None:
         found_by["profile"] = knobs.profile
+    if parse_target(knobs.target).in_process:
+        found_by["latency"] = LINK_LATENCY
     return Case(MODE, knobs.target, found.seed, tuple(found.steps), found.violation, found_by)
 
 

@@ -100,9 +100,9 @@ class Runner:
 
     def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
                  atomic: bool | None = None, connection: TargetConnection | None = None,
-                 profile: str | None = None) -> None:
+                 profile: str | None = None, latency: float = 0.0) -> None:
         self.world = w = World(target, seed, capture=capture, atomic=atomic, connection=connection,
-                               profile=profile)
+                               profile=profile, latency=latency)
         self.index = -1
         initial = {t: w.stored(t) for t in PLAN_TYPES}   # None over the wire: unknown
         self.versions = Versions(initial, atomic=w.profile.atomic, form=w.profile.form)
@@ -118,7 +118,6 @@ class Runner:
     def apply(self, step: dict[str, Any]) -> Violation | None:
         """Run one step; a violation seen while it ran (results, idleness) is returned."""
         self.index += 1
-        w = self.world
         kind = step.get("op")
         handler: Callable[[dict[str, Any]], _Group | Violation | None] = {
             "upload": self._operation, "download": self._operation, "clear": self._operation,

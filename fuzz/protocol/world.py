@@ -96,9 +96,10 @@ def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | No
 class World:
     def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
                  atomic: bool | None = None, connection: TargetConnection | None = None,
-                 profile: str | None = None) -> None:
+                 profile: str | None = None, latency: float = 0.0) -> None:
         self.uri = parse_target(target)
         self.seed = seed
+        self.latency = latency                 # one-way, every simulated link (in-process only)
         self.virtual = self.uri.in_process
         self.vehicle: VehicleNode | None = None
         self.guards: dict[str, GuardedNode] = {}
@@ -106,7 +107,7 @@ class World:
         self.connection: TargetConnection | None = None
         self._owns_connection = False
         if self.virtual:
-            self._up, self._down = FaultModel(), FaultModel()   # A's link; changed in place
+            self._up, self._down = self._latent(FaultModel()), self._latent(FaultModel())  # A's link; changed in place
             self._open_sim(capture)
         else:
             self._open_udp(capture, connection, seed)
@@ -125,9 +126,15 @@ class World:
         self.driver.run_until(_never, timeout=max(0.0, seconds))
 
     def set_faults(self, up: FaultModel, down: FaultModel) -> None:
-        """Faults on GCS A's link from now on: `up` is what A sends, `down` what it gets."""
-        install(self._up, up)
-        install(self._down, down)
+        """Faults on GCS A's link from now on: `up` is what A sends, `down` what it gets (on
+        top of the simulated links' own latency)."""
+        install(self._up, self._latent(up))
+        install(self._down, self._latent(down))
+
+    def _latent(self, model: FaultModel) -> FaultModel:
+        if not self.virtual or not self.latency:
+            return model
+        return dataclasses.replace(model, delay=model.delay + self.latency)
 
     @contextmanager
     def faults_lifted(self) -> Iterator[None]:
@@ -204,7 +211,7 @@ class World:
             gcs.endpoint.add_address("vehicle")
         net.connect("a", "vehicle", a_to_b=self._up, b_to_a=self._down)
         for name in ("b", "probe", "mute"):
-            net.connect(name, "vehicle")
+            net.connect(name, "vehicle", a_to_b=self._latent(FaultModel()), b_to_a=self._latent(FaultModel()))
         if capture is not None:
             net.add_capture(capture)
 

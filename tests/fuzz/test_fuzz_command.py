@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from mavconform.fuzz.case import load_case
+from mavconform.fuzz.case import LINK_LATENCY, load_case
 from mavconform.cli import main
 from mavconform.reports.run_document import load_run
 
@@ -264,6 +264,13 @@ def test_a_protocol_finding_replays_with_a_marker_per_step(tmp_path, capsys) -> 
     events = clause_events(doc, row)
     assert {(e["dir"], e["peer"]) for e in events if e["dir"] != "note"} == {("tx", "tester"), ("rx", "tester")}
     assert f"step 0: {steps[0]['op']}" in [e["msg"] for e in events if e["dir"] == "note"]
+    # in virtual time, yet each reply comes a link latency after what it answers: real times
+    times = [e["t"] for e in events]
+    assert times == sorted(times) and len(set(times)) > len(times) // 2
+    first_tx = next(i for i, e in enumerate(events) if e["dir"] == "tx")
+    first_rx = next(i for i, e in enumerate(events) if e["dir"] == "rx")
+    assert events[first_rx]["t"] - events[first_tx]["t"] >= LINK_LATENCY
+    assert load_case(case_path).found_by["latency"] == LINK_LATENCY
     capture = tmp_path / "again.mcap"
     assert main(["fuzz", "--replay", str(case_path), "--capture", str(capture)]) == 1
     with open(capture, "rb") as f:
@@ -271,3 +278,28 @@ def test_a_protocol_finding_replays_with_a_marker_per_step(tmp_path, capsys) -> 
     assert marks[0] == f"step 0: {steps[0]['op']}" and len(marks) <= len(steps)
     assert marks == [f"step {i}: {s['op']}" for i, s in enumerate(steps[:len(marks)])]
     capsys.readouterr()
+
+
+def test_a_case_saved_before_link_latency_replays_over_links_without_it(tmp_path, capsys) -> None:
+    """Cases found before the simulated links had a latency (no found_by.latency) replay as
+    they were found; a latency that is not a number of seconds is a one-line usage error."""
+    assert _fuzz(tmp_path, "--target", "mutant:non-atomic-upload", "--mode", "protocol", "--examples", "300",
+                 "--seed", "1") == 1
+    (case_path,) = sorted((tmp_path / "found").glob("*.json"))
+    doc = json.loads(case_path.read_text())
+    old = tmp_path / "old.json"
+    del doc["found_by"]["latency"]
+    old.write_text(json.dumps(doc))
+    capture = tmp_path / "old.mcap"
+    assert main(["fuzz", "--replay", str(old), "--capture", str(capture)]) == 1   # still found
+    from mcap.reader import make_reader
+    with open(capture, "rb") as f:
+        first = {}
+        for _, channel, message in make_reader(f).iter_messages():
+            first.setdefault(channel.topic, message.log_time)
+    assert first["a -> vehicle"] == first["vehicle -> a"]   # no latency: answered at that instant
+    doc["found_by"]["latency"] = "fast"
+    old.write_text(json.dumps(doc))
+    capsys.readouterr()
+    assert main(["fuzz", "--replay", str(old)]) == 2
+    assert capsys.readouterr().err.strip().endswith("found_by.latency: expected seconds in [0, 1], got 'fast'")
