@@ -18,7 +18,7 @@ from typing import Any
 
 from mavconform import __version__
 
-from mavconform.reports.run_document import FORMAT
+from mavconform.reports.run_document import AMBIENT, FORMAT
 
 from .catalogue import BY_ID
 from .gating import verdict
@@ -98,7 +98,9 @@ def _clause(r: ClauseResult, gating: bool) -> dict[str, Any]:
 
 def _volatile(r: ClauseResult, clause: dict[str, Any]) -> dict[str, Any]:
     """Take the clause's volatile values out of `clause` (its detail and exchange become
-    stable) and return them, for volatile.clauses[ID]."""
+    stable) and return them, for volatile.clauses[ID]: the times, measured numbers, and the
+    ambient events (a stream's messages no check used: how many fell inside the clause is
+    the stream's phase), each with the index it had in the whole exchange."""
     entry: dict[str, Any] = {"duration_s": r.duration_s}
     detail, values = str(r.detail), {}
     for text in (r.measured if isinstance(r, DecidedResult) else []):
@@ -108,17 +110,25 @@ def _volatile(r: ClauseResult, clause: dict[str, Any]) -> dict[str, Any]:
     clause["detail"] = detail
     if values:
         entry["detail"] = values
-    events, times, notes = [], [], {}
-    for index, event in enumerate(r.exchange):
-        event = {key: value for key, value in event.items() if key != "t"}
-        times.append(r.exchange[index].get("t", 0.0))
+    events, times, notes, ambient, kept_as = [], [], {}, [], {}
+    for index, recorded in enumerate(r.exchange):
+        event = {key: value for key, value in recorded.items() if key not in ("t", AMBIENT)}
+        t = recorded.get("t", 0.0)
+        if recorded.get(AMBIENT) and index != r.decided_by:
+            ambient.append({"at": index, "t": t, **event})   # a stream's timing, not evidence
+            continue
+        kept_as[index] = len(events)
+        times.append(t)
         if isinstance(event["msg"], Measured):
             if event["msg"].values:
-                notes[str(index)] = dict(event["msg"].values)
+                notes[str(len(events))] = dict(event["msg"].values)
             event["msg"] = event["msg"].stable
         events.append(event)
     clause["exchange"] = events
+    clause["decided_by"] = kept_as.get(r.decided_by) if r.decided_by is not None else None
     entry["events"] = times
     if notes:
         entry["notes"] = notes
+    if ambient:
+        entry["ambient"] = ambient
     return entry

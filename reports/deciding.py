@@ -25,7 +25,7 @@ import re
 from typing import Any
 
 from mavconform.reports.enum_names import field_value_name
-from mavconform.reports.run_document import NOTE, RX, SKIPPED
+from mavconform.reports.run_document import NOTE, RX, SKIPPED, kept_event_index
 from mavconform.reports.text import value_text
 
 _CITED = re.compile(r"\b([A-Z][A-Z0-9]*(?:_[A-Z0-9]+)+)(\{[^{}]*\})?")
@@ -54,11 +54,12 @@ def deciding_event(clause: dict[str, Any], events: list[dict[str, Any]],
 
 
 def recorded_event(clause: dict[str, Any], events: list[dict[str, Any]]) -> int | None:
-    """The clause's own `decided_by`, if it names one of `events`; else None (then
-    `deciding_event` guesses, and the report must not say the check recorded it)."""
+    """The clause's own `decided_by` (an index among the kept events), as an index in
+    `events` (ambient ones merged in), if it names one; else None (then `deciding_event`
+    guesses, and the report must not say the check recorded it)."""
     recorded = clause.get("decided_by")
-    if isinstance(recorded, int) and not isinstance(recorded, bool) and 0 <= recorded < len(events):
-        return recorded
+    if isinstance(recorded, int) and not isinstance(recorded, bool):
+        return kept_event_index(events, recorded)
     return None
 
 

@@ -34,7 +34,11 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
                clauses: {ID: {duration_s, events: [t, ...],      one t per exchange event:
                                                                  s from the clause's start
                               [detail: {name: text}],            the detail's <name>s
-                              [notes: {"INDEX": {name: text}}]}}} a note event's <name>s
+                              [notes: {"INDEX": {name: text}}],  a note event's <name>s
+                              [ambient: [{at, t, dir, peer, msg, fields}]]}}}
+                                 streamed messages no check used (MISSION_CURRENT at 1 Hz:
+                                 how many fall in a clause is the stream's phase), each at
+                                 its index in the whole exchange
 
 The summary counts must agree with the clauses, so no report shows two different totals,
 and a run marked interrupted cannot have the verdict "pass" (what it did not reach is not
@@ -74,6 +78,7 @@ LEVELS = ("MUST", "SHOULD", "MAY")
 GATING_MODES = ("strict", "default", "baseline")
 RESTORE_STATUSES = ("restored", "unchanged", "failed", "skipped")
 
+AMBIENT = "ambient"   # a merged-in event of a stream no check used (clause_events)
 TX, RX, NOTE = "tx", "rx", "note"  # tester sent, tester received from the target, commentary
 DIRECTIONS = (TX, RX, NOTE)
 
@@ -376,9 +381,9 @@ class _Checker:
                                             f"exchange ({len(exchange)} events)")
         return clause_id
 
-    def event(self, event: Any, path: str) -> None:
+    def event(self, event: Any, path: str, *, timed: bool = False) -> None:
         self.value(event, path, ("object",))
-        if self.old:
+        if self.old or timed:
             self.key(event, "t", path, "number")
         else:
             self.moved(event, ("t",), path)
@@ -431,6 +436,25 @@ class _Checker:
                         or clause["exchange"][int(index)]["dir"] != NOTE:
                     self.fail(f"{path}.notes.{index}", "not the index of a note in the exchange")
                 self.values(values, f"{path}.notes.{index}")
+            self.ambient(entry, len(clause["exchange"]), path)
+
+    def ambient(self, entry: dict, kept: int, path: str) -> None:
+        """Stream events no check used, each at its index in the whole exchange (ascending;
+        the kept events fill the other indices)."""
+        if "ambient" not in entry:
+            return
+        ambient = self.key(entry, "ambient", path, "array")
+        last = -1
+        for index, event in enumerate(ambient):
+            where = f"{path}.ambient[{index}]"
+            self.event(event, where, timed=True)
+            at = self.key(event, "at", where, "integer")
+            if not last < at < kept + len(ambient):
+                self.fail(f"{where}.at", f"{at} is not an index after {last} in an exchange of "
+                                         f"{kept + len(ambient)} events")
+            if event["dir"] != RX:
+                self.fail(f"{where}.dir", f"an ambient event is one received ({RX!r}), not {event['dir']!r}")
+            last = at
 
     def values(self, values: Any, path: str) -> None:
         """Measured numbers of a text, by the <name> that stands for each."""
@@ -466,7 +490,8 @@ def _volatile_clause(doc: dict[str, Any], clause: dict[str, Any]) -> dict[str, A
 
 def clause_events(doc: dict[str, Any], clause: dict[str, Any]) -> list[dict[str, Any]]:
     """The clause's exchange events, in order, each a new dict with its time `t` (s from
-    the clause's start) and, for a note, its measured numbers back in its text.
+    the clause's start) and, for a note, its measured numbers back in its text; the ambient
+    events (volatile) merged in where they arrived, each marked `ambient: true`.
 
     Renderers call this rather than reading `exchange`, which has no times (they are in
     `volatile`). A document without them (format 1 kept them in place) works too."""
@@ -482,7 +507,18 @@ def clause_events(doc: dict[str, Any], clause: dict[str, Any]) -> list[dict[str,
         if str(index) in notes:
             event["msg"] = fill(event["msg"], notes[str(index)])
         events.append(event)
+    for extra in entry.get("ambient", []):   # ascending: each lands where it arrived
+        event = {key: value for key, value in extra.items() if key != "at"}
+        event[AMBIENT] = True
+        events.insert(min(extra["at"], len(events)), event)
     return events
+
+
+def kept_event_index(events: list[dict[str, Any]], decided_by: int) -> int | None:
+    """Where the clause's `decided_by` (an index among its kept events) is in `events`, the
+    list `clause_events` returns (ambient events merged in); None if out of range."""
+    kept = [index for index, event in enumerate(events) if not event.get(AMBIENT)]
+    return kept[decided_by] if 0 <= decided_by < len(kept) else None
 
 
 def clause_detail(doc: dict[str, Any], clause: dict[str, Any]) -> str:

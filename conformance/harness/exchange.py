@@ -4,6 +4,12 @@ It is what the HTML report draws as a sequence diagram. Only mission traffic and
 messages mission clauses look at are kept: a SITL's telemetry would bury the exchange.
 It also holds which of its events decided the clause (`decide`), so the report marks the
 message the check judged instead of guessing it from the verdict's text.
+
+A message the target streams at its own rate (MISSION_CURRENT, about 1 Hz) lands in an
+exchange when its period says, not when the clause asks: one run catches one more inside a
+window than the next. Such an event is marked `ambient` until a check consumes it or it
+decides the clause; the run document keeps the ambient ones apart, with the volatile values,
+so two runs of the same target still compare equal (conformance/document.py).
 """
 
 from __future__ import annotations
@@ -11,9 +17,11 @@ from __future__ import annotations
 from typing import Any
 
 from mavconform.reference_impl.net.capture import json_safe
+from mavconform.reports.run_document import AMBIENT   # the key marking a streamed event nothing used
 
 MAX_EVENTS = 400
 KEPT_NAMES = frozenset({"STATUSTEXT", "COMMAND_ACK", "COMMAND_LONG"})
+STREAMED = frozenset({"MISSION_CURRENT"})   # kept messages a target sends on its own clock
 
 
 def relevant(name: str) -> bool:
@@ -22,6 +30,13 @@ def relevant(name: str) -> bool:
 
 def message_fields(msg: Any) -> dict[str, Any]:
     return {name: json_safe(getattr(msg, name)) for name in msg.get_fieldnames()}
+
+
+def used(event: dict[str, Any] | None) -> None:
+    """A check consumed the event's frame, or it decided the clause: it is evidence, not
+    ambient."""
+    if event is not None:
+        event.pop(AMBIENT, None)
 
 
 class Exchange:
@@ -34,12 +49,15 @@ class Exchange:
         self._decided: dict[str, Any] | None = None
 
     def add(self, now: float, direction: str, peer: str, name: str, fields: dict[str, Any]) -> int | None:
-        """Append an event; its index, or None if the exchange is full and it was not kept."""
+        """Append an event; its index, or None if the exchange is full and it was not kept.
+        A streamed message received is ambient until it is `used`."""
         if len(self.events) >= MAX_EVENTS:
             self.omitted += 1
             return None
-        self.events.append({"t": round(now - self.start, 6), "dir": direction, "peer": peer,
-                            "msg": name, "fields": fields})
+        event = {"t": round(now - self.start, 6), "dir": direction, "peer": peer, "msg": name, "fields": fields}
+        if direction == "rx" and name in STREAMED:
+            event[AMBIENT] = True
+        self.events.append(event)
         return len(self.events) - 1
 
     def note(self, now: float, peer: str, text: str) -> int | None:
@@ -50,6 +68,7 @@ class Exchange:
         forgets the choice. The last call before the verdict wins."""
         if isinstance(event, int):
             event = self.events[event] if 0 <= event < len(self.events) else None
+        used(event)
         self._decided = event
 
     @property

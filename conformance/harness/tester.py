@@ -26,7 +26,7 @@ from mavconform.reference_impl.mission.timing import Timings
 from mavconform.reference_impl.wire.frame import Frame
 
 from ..outcome import ClauseFailed, TargetUnresponsive
-from .exchange import Exchange, message_fields, relevant
+from .exchange import Exchange, message_fields, relevant, used
 from .match import Match
 from .measured import Measured
 from .stored_form import SPEC_FORM, StoredForm
@@ -124,6 +124,12 @@ class Tester:
         sent = self._sent
         if sent is not None and self.exchange is not None and sent[0] is self.exchange:
             self.exchange.decide(sent[1])
+
+    def _used(self, frame: Frame) -> None:
+        """A check consumed `frame`: its exchange event (if one kept it) is evidence."""
+        drawn = self._drawn.get(id(frame))
+        if drawn is not None and drawn[0] is frame:
+            used(drawn[1])
 
     def _remember(self, frame: Frame, event: dict[str, Any]) -> None:
         drawn = self._drawn
@@ -228,6 +234,7 @@ class Tester:
             if match(frame) and ours(frame):
                 if not peek:
                     consumed.add(i)
+                    self._used(frame)
                 return frame
         return None
 
@@ -246,6 +253,7 @@ class Tester:
                 continue
             if match(frame) or (stop is not None and stop(frame)):
                 consumed.add(i)
+                self._used(frame)
                 out.append(frame)
                 if stop is not None and stop(frame):
                     break

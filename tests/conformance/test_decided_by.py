@@ -18,7 +18,8 @@ from mavconform.conformance.runner import run_clauses
 from mavconform.conformance.session import Session
 from mavconform.conformance.target_uri import parse_target
 from mavconform.reports.html import html_report
-from mavconform.reports.run_document import check_run
+from mavconform.reports.deciding import recorded_event
+from mavconform.reports.run_document import check_run, clause_events
 
 REQUESTS = ("MISSION_REQUEST", "MISSION_REQUEST_INT")
 
@@ -109,12 +110,15 @@ def test_the_run_document_keeps_it_and_run_html_highlights_exactly_that_event() 
                                    started=dt.datetime(2026, 1, 1), gating_flags=flags,
                                    gating=summary, capture=None))
     clauses = {c["id"]: c for c in doc["clauses"]}
-    assert [clauses[r.clause_id]["decided_by"] for r in results] == [r.decided_by for r in results]
+    # decided_by counts the kept events; with the ambient ones merged back (clause_events)
+    # it is where the check's own event was
+    shown = {c["id"]: recorded_event(c, clause_events(doc, c)) for c in doc["clauses"]}
+    assert [shown[r.clause_id] for r in results] == [r.decided_by for r in results]
     assert all(isinstance(c["decided_by"], int) for c in clauses.values())
     assert "decided_by" not in doc["volatile"]["clauses"]["MIS.UP.03"]
     text = html_report(doc)
     for clause_id, clause in clauses.items():
-        assert _highlighted(text, clause_id) == [clause["decided_by"]], clause_id
+        assert _highlighted(text, clause_id) == [shown[clause_id]], clause_id
     assert "(as the check recorded it)" in text and "(as read from the verdict)" not in text
 
 

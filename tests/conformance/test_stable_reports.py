@@ -17,6 +17,7 @@ from mavconform.conformance.expectations import Deviation
 from mavconform.conformance.harness.measured import Measured
 from mavconform.conformance.outcome import Outcome
 from mavconform.conformance.runner import DecidedResult, RunOutcome
+from mavconform.reports.deciding import deciding_event
 from mavconform.reports.write import write_reports
 from mavconform.reports.run_document import (check_run, clause_detail, clause_duration,
                                              clause_events, identity_fact, load_run,
@@ -59,8 +60,8 @@ def test_two_runs_of_the_spec_differ_only_in_the_volatile_section(tmp_path, caps
     _assert_same_outside_volatile(first, second)
     assert first["volatile"] != second["volatile"]
     text = (tmp_path / "1" / "run.json").read_text()
-    assert '"t":' not in text and '"started"' in text and text.count('"duration_s"') == len(
-        first["clauses"]) + 1   # one per clause, one for the run: all under volatile
+    assert '"t":' not in json.dumps(_stable(first)) and '"started"' in text and text.count(
+        '"duration_s"') == len(first["clauses"]) + 1   # one per clause, one for the run: all under volatile
 
 
 def test_the_volatile_section_holds_what_the_renderers_need(tmp_path, capsys) -> None:
@@ -71,16 +72,18 @@ def test_the_volatile_section_holds_what_the_renderers_need(tmp_path, capsys) ->
     assert re.fullmatch(r"127\.0\.0\.1:\d+", facts["address"])
     for clause in doc["clauses"]:
         events = clause_events(doc, clause)
-        assert len(events) == len(clause["exchange"]) > 0
+        ambient = doc["volatile"]["clauses"][clause["id"]].get("ambient", [])
+        assert len(events) == len(clause["exchange"]) + len(ambient) > 0
         assert all(isinstance(e["t"], float) and e["t"] >= 0 for e in events)
         assert clause_duration(doc, clause) >= max(e["t"] for e in events) - 0.01
-        assert [{k: v for k, v in e.items() if k != "t"} for e in events if e["dir"] != "note"] \
+        assert [{k: v for k, v in e.items() if k != "t"} for e in events
+                if e["dir"] != "note" and not e.get("ambient")] \
             == [e for e in clause["exchange"] if e["dir"] != "note"]   # order, peer, fields kept
     heartbeats = next(c for c in doc["clauses"] if c["id"] == "MIS.FRM.04")
     index = next(i for i, e in enumerate(heartbeats["exchange"]) if e["msg"].startswith("HEARTBEATs"))
     assert heartbeats["exchange"][index]["msg"] == "HEARTBEATs at <at> s into a 2.5 s window"
-    assert re.fullmatch(r"HEARTBEATs at \[\d\.\d+, \d\.\d+.*\] s into a 2\.5 s window",
-                        clause_events(doc, heartbeats)[index]["msg"])
+    shown = next(e["msg"] for e in clause_events(doc, heartbeats) if e["msg"].startswith("HEARTBEATs"))
+    assert re.fullmatch(r"HEARTBEATs at \[\d\.\d+, \d\.\d+.*\] s into a 2\.5 s window", shown)
     # the reports show the measured values, never a placeholder
     for name in ("run.md", "run.html", "run.junit.xml"):
         shown = (tmp_path / name).read_text()
@@ -132,6 +135,64 @@ def test_an_expectation_that_rewords_a_detail_leaves_its_numbers_apart() -> None
     clause = doc["clauses"][0]
     assert clause["detail"].endswith("expected no X for <window> s; got Y after <after> s")
     assert clause_detail(doc, clause) == result.detail
+
+
+def _event(t: float, direction: str, name: str, **fields) -> dict:
+    return {"t": t, "dir": direction, "peer": "tester", "msg": name, "fields": fields}
+
+
+def test_a_streamed_message_no_check_used_is_kept_apart_where_it_arrived(tmp_path) -> None:
+    """A 1 Hz MISSION_CURRENT lands inside a clause when the stream's phase says: one run
+    has it, the next does not. Unused, it goes to volatile (`ambient`, with its place in the
+    exchange); the report merges it back, and decided_by still names the deciding event."""
+    def result(with_stream: bool) -> DecidedResult:
+        exchange = [_event(0.0, "tx", "MISSION_COUNT", count=1)]
+        if with_stream:
+            exchange.append({**_event(0.3, "rx", "MISSION_CURRENT", seq=0), "ambient": True})
+        exchange += [_event(0.4, "rx", "MISSION_REQUEST_INT", seq=0),
+                     _event(0.5, "rx", "MISSION_CURRENT", seq=0)]   # used by the check: evidence
+        return DecidedResult("MIS.UP.01", Outcome.FAIL, "wrong", 0.6, exchange,
+                             decided_by=len(exchange) - 2)
+    docs = []
+    for with_stream in (True, False):
+        r = result(with_stream)
+        flags, summary = gating.gate([r], strict=False, baseline=None)
+        docs.append(check_run(document.build(document.RunOptions("builtin:spec"), RunOutcome(
+            [r], None, {"status": "skipped", "detail": ""}, 1.0, 0.0), started=dt.datetime(2026, 1, 1),
+            gating_flags=flags, gating=summary, capture=None)))
+    assert _stable(docs[0]) == _stable(docs[1])
+    clause = docs[0]["clauses"][0]
+    assert [e["msg"] for e in clause["exchange"]] == ["MISSION_COUNT", "MISSION_REQUEST_INT", "MISSION_CURRENT"]
+    assert clause["decided_by"] == 1
+    assert docs[0]["volatile"]["clauses"]["MIS.UP.01"]["ambient"] == [
+        {"at": 1, "t": 0.3, "dir": "rx", "peer": "tester", "msg": "MISSION_CURRENT", "fields": {"seq": 0}}]
+    events = clause_events(docs[0], clause)
+    assert [(e["msg"], e["t"], e.get("ambient", False)) for e in events] == [
+        ("MISSION_COUNT", 0.0, False), ("MISSION_CURRENT", 0.3, True),
+        ("MISSION_REQUEST_INT", 0.4, False), ("MISSION_CURRENT", 0.5, False)]
+    assert deciding_event(clause, events) == 2
+    write_reports(docs[0], tmp_path)
+    write_reports(docs[1], tmp_path / "without")
+    drawn = [(folder / "run.html").read_text().count("MISSION_CURRENT seq=0") for folder in (tmp_path, tmp_path / "without")]
+    assert drawn[0] == 2 * drawn[1] > 0   # the ambient one is drawn too
+    broken = json.loads(json.dumps(docs[0]))
+    broken["volatile"]["clauses"]["MIS.UP.01"]["ambient"][0]["at"] = 9
+    with pytest.raises(Exception, match=r"volatile\.clauses\.MIS\.UP\.01\.ambient\[0\]\.at: 9 is not an index"):
+        check_run(broken)
+
+
+def test_a_check_that_consumes_a_streamed_message_keeps_it_as_evidence() -> None:
+    """The tester clears the mark when a check takes the frame (or it decides the clause)."""
+    from mavconform.conformance.harness.exchange import Exchange, used
+    ex = Exchange(0.0)
+    index = ex.add(0.1, "rx", "tester", "MISSION_CURRENT", {"seq": 0})
+    assert ex.events[index]["ambient"] is True
+    used(ex.events[index])
+    assert "ambient" not in ex.events[index]
+    other = ex.add(0.2, "rx", "tester", "MISSION_CURRENT", {"seq": 1})
+    ex.decide(other)
+    assert "ambient" not in ex.events[other]
+    assert "ambient" not in ex.events[ex.add(0.3, "rx", "tester", "MISSION_ACK", {"type": 0})]
 
 
 def test_how_long_the_target_took_to_boot_is_volatile(tmp_path) -> None:
