@@ -26,9 +26,12 @@ from mavconform.reports.run_document import (check_run, clause_detail, clause_du
 pytestmark = pytest.mark.udp
 
 # Every upload and download clause: long exchanges, and windows that follow the target's own
-# timers. (Not FRM.04/05: they last until the target's next HEARTBEAT, whose phase is the
-# run's, so whether its 1 Hz MISSION_CURRENT falls inside them is too: an event, not a value.)
+# timers.
 SPEC_CLAUSES = "MIS.UP.*,MIS.DN.*"
+# Clauses whose windows follow the target's streams (its HEARTBEAT, its 1 Hz MISSION_CURRENT):
+# whether a MISSION_CURRENT falls inside one is the stream's phase, so the unused ones are
+# ambient (volatile).
+STREAM_CLAUSES = "MIS.FRM.*,MIS.CUR.*,MIS.PRG.*"
 
 
 def _run(capsys, folder: Path, *argv: str) -> tuple[int, str, dict]:
@@ -62,6 +65,15 @@ def test_two_runs_of_the_spec_differ_only_in_the_volatile_section(tmp_path, caps
     text = (tmp_path / "1" / "run.json").read_text()
     assert '"t":' not in json.dumps(_stable(first)) and '"started"' in text and text.count(
         '"duration_s"') == len(first["clauses"]) + 1   # one per clause, one for the run: all under volatile
+
+
+def test_clauses_that_span_the_targets_streams_differ_only_in_the_volatile_section(tmp_path, capsys) -> None:
+    code1, _, first = _run(capsys, tmp_path / "1", "--clauses", STREAM_CLAUSES)
+    code2, _, second = _run(capsys, tmp_path / "2", "--clauses", STREAM_CLAUSES)
+    assert code1 == code2 == 0
+    _assert_same_outside_volatile(first, second)
+    ambient = [e for c in first["volatile"]["clauses"].values() for e in c.get("ambient", [])]
+    assert ambient and {e["msg"] for e in ambient} == {"MISSION_CURRENT"}
 
 
 def test_the_volatile_section_holds_what_the_renderers_need(tmp_path, capsys) -> None:
