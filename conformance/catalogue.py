@@ -1,10 +1,12 @@
-"""Every clause the suite decides, as data: the vehicle side of the Mission Protocol.
+"""Every clause the suite decides, as data: the vehicle side of the Mission Protocol (MIS.*)
+and of operator control, the MAVLink layer of authority handover (HO.*).
 
 Sources are the seed texts under ../shared/seeds (the Mission Protocol restated in seed
 000, framing and routing in seed 001) and the upstream XML where the seed is silent and
-upstream speaks (MISSION_CURRENT streaming, opaque_id, MAV_MISSION_TYPE_ALL). Levels follow
-the source's own words; where a sentence mixes "must" and "should" the clause takes the
-word that governs the behaviour checked. Ids are stable: a retired clause keeps its id.
+upstream speaks (MISSION_CURRENT streaming, opaque_id, MAV_MISSION_TYPE_ALL); operator
+control is upstream development.xml's (MAV_CMD_REQUEST_OPERATOR_CONTROL, CONTROL_STATUS).
+Levels follow the source's own words; where a sentence mixes "must" and "should" the
+clause takes the word that governs the behaviour checked. Ids are stable: a retired clause keeps its id.
 """
 
 from __future__ import annotations
@@ -14,6 +16,9 @@ import fnmatch
 from mavconform.reference_impl.errors import UsageError
 
 from .clause import SEED_000, SEED_001, UPSTREAM, Clause, Level, Role
+
+# MAV_CMD_REQUEST_OPERATOR_CONTROL and CONTROL_STATUS (HO.CTL.*) are in the development dialect
+DEVELOPMENT = "mavlink-upstream/development.xml"
 
 MUST, SHOULD, MAY = Level.MUST, Level.SHOULD, Level.MAY
 V = Role.VEHICLE
@@ -45,6 +50,17 @@ _UNALTERED = ("Errors are considered unrecoverable. In an error is sent, both en
               "the vehicle should be unaltered.")
 _ROBUST = ("Mission update must be robust! A new mission should be fully uploaded and accepted "
            "before the old mission is replaced/removed.")
+
+# Operator control: the vehicle as its own system manager, single-owner mode. Only what the
+# XML says the system manager does is a clause; its open choices (a grant's takeover window,
+# whether an uncontrolled vehicle takes commands from anyone, which MISSION_ACK code refuses a
+# write, how long a silent owner is kept) are not. A sentence without a modal (HO.CTL.09's)
+# takes the level of the one it elaborates: 219's "should be rejected".
+_STATUS_RATE = ("This should be broadcast at low rate (nominally 1 Hz) and emitted when ownership or "
+                "takeover status change.")
+_GRANT = ("The system manager component should grant control to the requested GCS(s) if the system "
+          "does not require takeover permission (or is uncontrolled) and ACK the request with "
+          "MAV_RESULT_ACCEPTED.")
 
 CLAUSES: tuple[Clause, ...] = (
     # --- upload ---------------------------------------------------------------------------
@@ -218,6 +234,48 @@ CLAUSES: tuple[Clause, ...] = (
     _c("MIS.OID.02", MAY, "The plan's opaque_id changes when the plan changes",
        f"{UPSTREAM}:5907", "The only requirement on the id is that it must change when there is "
        "any change to the on-vehicle plan type."),
+    # --- operator control (development.xml; see _HO below) ---------------------------------
+    _c("HO.CTL.01", SHOULD, "CONTROL_STATUS is broadcast at about 1 Hz",
+       f"{DEVELOPMENT}:601", _STATUS_RATE),
+    _c("HO.CTL.02", SHOULD, "A request for control while no GCS is in control is granted: COMMAND_ACK ACCEPTED",
+       f"{DEVELOPMENT}:216", _GRANT),
+    _c("HO.CTL.03", SHOULD, "After the owner releases control, CONTROL_STATUS shows no owner and another GCS's "
+       "request is granted", f"{DEVELOPMENT}:216", _GRANT),
+    _c("HO.CTL.04", SHOULD, "After a grant, the CONTROL_STATUS stream names the new owner in gcs_main",
+       f"{DEVELOPMENT}:217", "The system manager component should then stream CONTROL_STATUS indicating "
+       "its controlling system(s): all other components in the system (with the same system id) should "
+       "monitor this message and set their own controlling GCS(s) to match that of the system manager "
+       "component."),
+    _c("HO.CTL.05", SHOULD, "CONTROL_STATUS is sent at once when the owner or the takeover flag changes",
+       f"{DEVELOPMENT}:601", _STATUS_RATE),
+    _c("HO.CTL.06", SHOULD, "Another GCS's request while control is held, takeover not allowed, is refused "
+       "with MAV_RESULT_FAILED", f"{DEVELOPMENT}:219", "If the system manager component cannot grant control "
+       "because takeover requires permission, the request should be rejected with MAV_RESULT_FAILED."),
+    _c("HO.CTL.07", SHOULD, "A request refused for lack of permission is sent on to the owner as the same command",
+       f"{DEVELOPMENT}:220", "The system manager component should then send this same command to the "
+       "owning GCS with the lowest system ID that has a heartbeat, in order to notify of the request."),
+    _c("HO.CTL.08", SHOULD, "Once the owner re-requests with takeover allowed, another GCS's request is granted",
+       f"{DEVELOPMENT}:216", _GRANT),
+    _c("HO.CTL.09", SHOULD, "Once the owner re-requests with takeover disallowed, requests are refused again",
+       f"{DEVELOPMENT}:222", "In case it choses to re-request control with takeover bit set to allow "
+       "permission, the requester GCS will only have 10 seconds to get control, otherwise owning GCS will "
+       "re-request control with takeover bit set to disallow permission, and requester GCS will need repeat "
+       "the request if still interested in getting control."),
+    _c("HO.CTL.10", SHOULD, "A command from a GCS not in control is refused: COMMAND_ACK MAV_RESULT_NOT_IN_CONTROL",
+       f"{DEVELOPMENT}:204", "Commands to control the vehicle from other systems should be rejected with "
+       "MAV_RESULT_NOT_IN_CONTROL (except for this command, which may be acknowledged with "
+       "MAV_RESULT_ACCEPTED if control is granted)."),
+    _c("HO.CTL.11", SHOULD, "Mission writes from a GCS not in control are refused: the stored plan stays",
+       f"{DEVELOPMENT}:203", "A controlled system should only accept MAVLink operations that change the "
+       "state of the vehicle, such as commands and command-like messages, which are sent by its controlling "
+       "GCS(s) (or from other components in its own system/with the same system id, such as a companion "
+       "computer)."),
+    _c("HO.CTL.12", MAY, "A GCS not in control may still download the plan and request messages",
+       f"{DEVELOPMENT}:205", "Messages and commands that don't control or change vehicle movement or "
+       "functionality, such as telemetry requests, may still be send from (and to) a controlled system."),
+    _c("HO.CTL.13", SHOULD, "When the owner's HEARTBEATs stop, CONTROL_STATUS comes with no owner",
+       f"{DEVELOPMENT}:226", "If all owning GCS are disconnected the vehicle should GCS loss failsafe, and "
+       "broadcast a CONTROL_STATUS indicating that it has no owner(s)."),
 )
 
 BY_ID: dict[str, Clause] = {c.id: c for c in CLAUSES}

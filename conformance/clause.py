@@ -14,7 +14,7 @@ SEED_000 = "seeds/000_e382b17b02933558.txt"   # the Mission Protocol text (secon
 SEED_001 = "seeds/001_8a174eac43c4bfd2.txt"   # MAVLink framing, routing and signing
 UPSTREAM = "mavlink-upstream/common.xml"       # upstream message definitions
 
-_ID = re.compile(r"MIS\.[A-Z]{2,4}\.\d{2}")
+_ID = re.compile(r"(MIS|HO)\.[A-Z]{2,4}\.\d{2}")   # HO: handover (operator control)
 
 
 class Level(str, Enum):
@@ -33,7 +33,7 @@ class Role(str, Enum):
 
 @dataclass(frozen=True)
 class Clause:
-    id: str            # stable: MIS.<group>.<nn>; never renumbered, retired ids are not reused
+    id: str            # stable: MIS|HO.<group>.<nn>; never renumbered, retired ids are not reused
     level: Level
     role: Role
     title: str         # one line in our words

@@ -74,7 +74,7 @@ class Session:
             if not uri.in_process:
                 raise ValueError("virtual time needs an in-process target")
             self.driver: Any = SimNetwork(seed)
-            self.vehicle = build_vehicle(uri)
+            self.vehicle = build_vehicle(uri, **uri.suite_overrides())
             self.guard = GuardedNode(self.vehicle)
             self.driver.add_node("vehicle", self.guard)
             self.driver.add_node("tester", self.link)
@@ -86,7 +86,7 @@ class Session:
             self.driver = UdpDriver(seed=seed)
             try:
                 if uri.in_process:
-                    self.vehicle = build_vehicle(uri)
+                    self.vehicle = build_vehicle(uri, **uri.suite_overrides())
                     self.guard = GuardedNode(self.vehicle)
                     self.target_address = self.driver.add_node(self.guard)
                     tester_address = self.driver.add_node(self.link)

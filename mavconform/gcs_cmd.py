@@ -21,6 +21,8 @@ from mavconform.reference_impl.net.uri import FORMS, local_bind_for
 from mavconform.reference_impl.mission.timing import Timings
 from mavconform.reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
 from mavconform.reference_impl.session import GcsSession, TargetUnresponsive
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.wire.signing import SigningKey, secret_from_hex, secret_from_passphrase
 
 from .options import capture_to, mavlink_id, seconds_up_to, seq_number, time_scale
 
@@ -34,6 +36,9 @@ to it (ArduPilot: home at seq 0, non-terminating NACKs, ...; PX4: ...; anything 
 spec-exact GCS); --adapt fixes the choice. The adaptations that acted are printed at the end.
 `gcs control` asks for, releases or shares operator control of a vehicle that has it
 (`mavconform vehicle --operator-control`).
+With --signing-key (or --signing-passphrase) every frame is signed with this GCS's own
+MAVLink 2 key, as a vehicle with a signing roster requires (`mavconform vehicle
+--signing-roster`); such a vehicle drops unsigned frames, so without the key it looks silent.
 Exit 0 when every operation succeeded, 1 when one failed or the target never answered, 2 for
 a usage mistake.
 """
@@ -78,6 +83,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
                        help="stretch every protocol timeout by X for slow links (default 1)")
         p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
+        keys = p.add_mutually_exclusive_group()
+        keys.add_argument("--signing-key", type=_hex_key, metavar="HEX",
+                          help="sign every frame with this MAVLink 2 key (64 hex digits): this GCS's "
+                               "own key, as the vehicle's roster has it")
+        keys.add_argument("--signing-passphrase", type=_passphrase_key, metavar="TEXT",
+                          help="the same, the key being SHA-256 of TEXT (as MAVProxy's `signing setup`)")
+        p.add_argument("--signing-link-id", type=_link_id, metavar="N",
+                       help="link id written into our signatures (0..255, default 0)")
         p.set_defaults(run=run)
     for p in (up, down, clear, setcur):
         p.add_argument("--float", action="store_true",
@@ -155,7 +168,8 @@ def _session(args: argparse.Namespace, target: UdpUri, **node: Any) -> Iterator[
     timings = Timings().scaled(args.time_scale)
     config = GcsConfig(system=args.system, timings=timings, download_int=not args.float,
                        adaptations=None if args.adapt == "auto" else NAMED[args.adapt],
-                       control=_client_config(args) if args.operation == "control" else None)
+                       control=_client_config(args) if args.operation == "control" else None,
+                       signing=_signing(args))
     remote = target.address if target.mode == "udp" else None
     gcs = GcsNode(config, remote=remote, wall_clock=clock.wall, **node)
     bind = target.address if target.mode == "udpin" else (local_bind_for(target.host), 0)
@@ -163,6 +177,40 @@ def _session(args: argparse.Namespace, target: UdpUri, **node: Any) -> Iterator[
         driver.add_node(gcs, bind=bind)   # bind first: a bad address leaves no capture file
         with capture_to(driver, args.capture):
             yield GcsSession(driver, gcs)
+
+
+# --- signing --------------------------------------------------------------------------------
+def _hex_key(text: str) -> bytes:
+    try:
+        return secret_from_hex(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _passphrase_key(text: str) -> bytes:
+    try:
+        return secret_from_passphrase(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _link_id(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not 0 <= value <= 255:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a link id in 0..255")
+    return value
+
+
+def _signing(args: argparse.Namespace) -> SigningKey | None:
+    secret = args.signing_key or args.signing_passphrase
+    if secret is None:
+        if args.signing_link_id is not None:
+            raise UsageError("--signing-link-id needs --signing-key or --signing-passphrase")
+        return None
+    return SigningKey(secret, args.signing_link_id or 0)
 
 
 # --- gcs control ----------------------------------------------------------------------------

@@ -8,6 +8,7 @@ import sys
 from typing import Any
 
 from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.handover.authenticity import Roster, load_roster
 from mavconform.reference_impl.handover.control_manager import ManagerConfig
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
@@ -29,6 +30,11 @@ With --operator-control it is also its own system manager (MAV_CMD_REQUEST_OPERA
 CONTROL_STATUS at 1 Hz): a GCS asks for control first and only that GCS may then change
 the plans or send commands; others may still download and are refused with
 MISSION_ACK DENIED / COMMAND_ACK NOT_IN_CONTROL. Control changes print as they happen.
+With --signing-roster it knows its GCSs by their MAVLink 2 signing keys: each frame is
+checked against the key of the GCS whose system id it carries, and dropped (and counted)
+if it is unsigned, signed with another key or by a system not in the roster, or a replay;
+what it sends to a GCS is signed with that GCS's key. A system not in the roster never
+gains operator control, even with --accept-unsigned.
 """
 
 EPILOG = """\
@@ -40,6 +46,10 @@ examples:
   mavconform vehicle --listen udp:127.0.0.1:0 --loss 0.1 --reorder 0.05 --seed 7
   mavconform vehicle --connect udp:127.0.0.1:14551     # talk first to a GCS listening there
   mavconform vehicle --operator-control --owner-loss 3 # `mavconform gcs control request` first
+  mavconform vehicle --operator-control --signing-roster gcss.json
+      # gcss.json: [{"sysid": 201, "name": "A", "key": "<64 hex digits>"},
+      #             {"sysid": 202, "name": "B", "passphrase": "words only B knows"}]
+      # then: mavconform gcs control request --system 201 --signing-key <A's 64 hex digits> ...
 """
 
 
@@ -81,6 +91,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--open-when-unowned", action="store_true",
                    help="with --operator-control: while no GCS is in control, let any GCS change the plans "
                         "(for GCSs that never ask for control)")
+    p.add_argument("--signing-roster", metavar="FILE.json",
+                   help="known GCSs and their MAVLink 2 signing keys, a JSON list of "
+                        '{"sysid": N, "key": "64 hex digits" or "passphrase": "...", "name": "...", '
+                        '"link_id": N}: every frame must be signed with the key of the GCS it claims '
+                        "to be; frames to a GCS are signed with its key")
+    p.add_argument("--accept-unsigned", action="store_true",
+                   help="with --signing-roster: let unsigned frames through (a signed frame must "
+                        "still check out; a system not in the roster still never gains control)")
     add_fault_options(p)
     p.set_defaults(run=run)
 
@@ -92,9 +110,12 @@ def run(args: argparse.Namespace) -> int:
     behaviour = profile.behaviour
     if args.capacity is not None:
         behaviour = dataclasses.replace(behaviour, capacity={**behaviour.capacity, MissionType.MISSION: args.capacity})
+    roster = _roster(args)
     config = dataclasses.replace(profile.config, system=args.system, component=args.component,
                                  autostart=args.autostart, speed=args.speed, behaviour=behaviour,
                                  single_peer_link=args.single_peer, control=_control(args))
+    if roster is not None:
+        config = dataclasses.replace(config, roster=roster, require_signature=not args.accept_unsigned)
     faults = fault_model(args)
     clock = MonotonicClock()
     vehicle = _mutant(args.mutant, config, args.profile) if args.mutant else VehicleNode(config, wall_clock=clock.wall)
@@ -110,8 +131,27 @@ def run(args: argparse.Namespace) -> int:
                 print(f"operator control on: until a GCS takes control {unowned} change the plans; "
                       f"a GCS in control is lost after {config.control.owner_loss_timeout:g} s without "
                       "its HEARTBEAT", flush=True)
+            if roster is not None and not args.quiet:
+                names = ", ".join(g.label for g in roster.gcss)
+                unsigned = "accepted" if args.accept_unsigned else "dropped"
+                print(f"signing: {len(roster.gcss)} GCSs known from {args.signing_roster} ({names}); "
+                      f"unsigned frames {unsigned}", flush=True)
             _serve(driver, vehicle, clock, args)
     return 0
+
+
+def _roster(args: argparse.Namespace) -> Roster | None:
+    """The --signing-roster file, checked before any socket is opened."""
+    if args.signing_roster is None:
+        if args.accept_unsigned:
+            raise UsageError("--accept-unsigned needs --signing-roster")
+        return None
+    roster = load_roster(args.signing_roster)
+    for i, gcs in enumerate(roster.gcss, 1):
+        if gcs.sysid == args.system:
+            raise UsageError(f"{args.signing_roster}: entry {i}: sysid {gcs.sysid} is the vehicle's own "
+                             "(--system); the roster lists GCSs")
+    return roster
 
 
 def _control(args: argparse.Namespace) -> ManagerConfig | None:
@@ -146,6 +186,7 @@ def _serve(driver: UdpDriver, vehicle: VehicleNode, clock: MonotonicClock, args:
 
 def _relay(driver: UdpDriver, vehicle: VehicleNode, end: float | None, clock: MonotonicClock,
            args: argparse.Namespace) -> None:
+    dropped = 0
     while end is None or clock.now() < end:
         step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))
         driver.run_until(lambda: bool(vehicle.events), timeout=step)
@@ -153,3 +194,16 @@ def _relay(driver: UdpDriver, vehicle: VehicleNode, end: float | None, clock: Mo
             if not args.quiet:
                 print(event, flush=True)
         vehicle.events.clear()
+        dropped = _print_drops(vehicle, dropped, args)
+
+
+def _print_drops(vehicle: VehicleNode, shown: int, args: argparse.Namespace) -> int:
+    """At most once a step, a line when frames were dropped for their signature since the
+    last one: the counts by reason and the latest drop (who it claimed to be, from where)."""
+    endpoint = vehicle.endpoint
+    total = endpoint.rejected_signatures
+    if total != shown and not args.quiet and endpoint.rejected:
+        reasons = ", ".join(f"{reason} {n}" for reason, n in sorted(endpoint.rejections.items()))
+        frames = f"{total} frame{'s' if total != 1 else ''}"
+        print(f"signing: {frames} dropped so far ({reasons}); last: {endpoint.rejected[-1]}", flush=True)
+    return total

@@ -26,6 +26,7 @@ from .endpoint import MavlinkEndpoint
 from .errors import LocalProtocolError
 from .handover.control_client import ClientConfig, ControlClient, Policy, always
 from .handover.control_results import ControlResult, Decision, StatusChanged, TakeoverRequested
+from .handover.gcs_handover import HandoverAgent
 from .mission.actions import Finished, Peer
 from .mission import messages as m
 from .mission.adaptations import NONE, Adaptations, for_autopilot
@@ -59,7 +60,8 @@ MAX_CONTROL_EVENTS = 1000
 
 class GcsNode:
     def __init__(self, config: GcsConfig | None = None, *, remote: Address | None = None,
-                 wall_clock: Callable[[], float] = time.time, control_policy: Policy = always(None)) -> None:
+                 wall_clock: Callable[[], float] = time.time, control_policy: Policy = always(None),
+                 handover: HandoverAgent | None = None) -> None:
         """`control_policy` answers requests for control the vehicle forwards to us while we
         own it (None from it: the operator answers later with `answer_takeover`)."""
         self.config = cfg = config or GcsConfig()
@@ -76,6 +78,8 @@ class GcsNode:
         self._next_heartbeat: float | None = 0.0
         self.control: ControlClient | None = None
         self.control_policy = control_policy
+        # the handover agent (handover/gcs_handover.py): its policy replaces control_policy
+        self.handover = handover
         self.control_results: list[ControlResult] = []
         self.control_events: deque[TakeoverRequested | StatusChanged] = deque(maxlen=MAX_CONTROL_EVENTS)
         if self.target is not None:
@@ -150,6 +154,8 @@ class GcsNode:
                 self._run(self.client.handle(frame, now))
             if self.control is not None:
                 self._run_control(self.control.handle(frame, now))
+                if self.handover is not None:
+                    self._run_control(self.handover.handle(frame, now, self.control))
             if len(self.received) < 10_000:
                 self.received.append(frame.msg)
 
@@ -158,13 +164,15 @@ class GcsNode:
             self._run(self.client.poll(now))
         if self.control is not None:
             self._run_control(self.control.poll(now))
+            if self.handover is not None:
+                self._run_control(self.handover.poll(now, self.control))
         if self._next_heartbeat is not None and now >= self._next_heartbeat:
             self._next_heartbeat = now + m.HEARTBEAT_PERIOD
             self.endpoint.send(m.gcs_heartbeat_message())
 
     def next_deadline(self) -> float | None:
         best = self._next_heartbeat
-        for engine in (self.client, self.control):
+        for engine in (self.client, self.control, self.handover if self.control is not None else None):
             t = engine.next_deadline() if engine is not None else None
             if t is not None and (best is None or t < best):
                 best = t
@@ -204,7 +212,8 @@ class GcsNode:
                                     adaptations=self.adaptations)
         if cfg.control is not None:
             self.control = ControlClient(cfg.system, cfg.component, self.target, cfg.control,
-                                         policy=self.control_policy)
+                                         policy=self.handover.policy if self.handover is not None
+                                         else self.control_policy)
 
     def _require_client(self) -> MissionClient:
         if self.client is None:

@@ -21,8 +21,13 @@ from typing import Any, Callable
 from .endpoint import MavlinkEndpoint
 from .flight import FlightSim, Position
 from .handover import control_messages as cm
+from .handover.authenticity import Roster, UnknownGcsGate
 from .handover.control_manager import ControlManager, ManagerConfig
 from .handover.control_results import ControlChanged, OwnerLost
+from .handover.geo import GeoPoint
+from .handover.mission_computer import (HandoverFinished, HandoverStarted, MissionComputer, MissionComputerConfig,
+                                        WithdrawTakeover, mission_waypoints)
+from .handover.mission_computer_transitions import McState
 from .mission import messages as m
 from .mission.actions import Send
 from .mission.behaviour import ServerBehaviour
@@ -67,6 +72,15 @@ class VehicleConfig:
     # first (the request, mission downloads and telemetry requests are always let through),
     # so no GCS can change the plan of a vehicle it never took.
     control: ManagerConfig | None = None
+    # Known GCSs, each with its own signing key (handover/authenticity.py). None: `signing`
+    # alone, as before. Set: a frame is checked against the key of the system it claims and
+    # frames to a GCS are signed with its key; with `control`, a system not in the roster
+    # never reaches the manager (never gains control), even if unsigned frames are accepted.
+    roster: Roster | None = None
+    # The thesis's mission computer (handover/mission_computer.py). None (the default): no
+    # handover, as before. Set (needs `control`): it is told the flight's position, starts
+    # the handover sequence in a handover region and withdraws what an aborted one left open.
+    handover: MissionComputerConfig | None = None
 
 
 class VehicleNode:
@@ -74,11 +88,14 @@ class VehicleNode:
 
     def __init__(self, config: VehicleConfig | None = None, *,
                  wall_clock: Callable[[], float] = time.time,
-                 server_class: type[MissionServer] = MissionServer) -> None:
+                 server_class: type[MissionServer] = MissionServer,
+                 manager_class: type[ControlManager] = ControlManager) -> None:
         self.config = cfg = config or VehicleConfig()
+        keyring = cfg.roster.keyring(cfg.system, cfg.signing) if cfg.roster is not None else None
         self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
                                         signing=cfg.signing, require_signature=cfg.require_signature,
-                                        wall_clock=wall_clock, single_peer=cfg.single_peer_link)
+                                        wall_clock=wall_clock, single_peer=cfg.single_peer_link, keyring=keyring)
+        self.gate = UnknownGcsGate(cfg.roster, cfg.system, cfg.component) if cfg.roster is not None else None
         self.server = server_class(cfg.system, cfg.component, cfg.behaviour)
         self.server.home = home_item(cfg.home)
         self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed)
@@ -88,9 +105,16 @@ class VehicleNode:
         self._seen_quick = (self.server.store.version, 0, 0)
         self._next_heartbeat: float | None = 0.0
         self._next_position: float | None = 0.0
-        self.control = ControlManager(cfg.system, cfg.component, cfg.control) if cfg.control is not None else None
+        # manager_class: the conformance mutants plug a broken system manager in here
+        self.control = manager_class(cfg.system, cfg.component, cfg.control) if cfg.control is not None else None
         self.control_events: deque[ControlChanged | OwnerLost] = deque(maxlen=MAX_CONTROL_EVENTS)
         self.refused = 0              # frames the control filter stopped
+        if cfg.handover is not None and self.control is None:
+            raise ValueError("VehicleConfig.handover needs VehicleConfig.control: the mission computer "
+                             "hands control over through the system manager")
+        self.mission_computer = (MissionComputer(cfg.system, cfg.component, cfg.handover)
+                                 if cfg.handover is not None else None)
+        self.handover_events: deque[Any] = deque(maxlen=MAX_CONTROL_EVENTS)
 
     @property
     def store(self):
@@ -121,13 +145,18 @@ class VehicleNode:
             elif name in ("COMMAND_LONG", "COMMAND_INT"):
                 self._on_command(msg, frame.source, now)
         self._note_changes()
+        if self.mission_computer is not None:
+            self._sync_mission_computer(now)
 
     def poll(self, now: float) -> None:
         if self.control is not None:
-            self._on_control(self.control.poll(now))
+            self._on_control(self.control.poll(now), now)
         self._send(self.server.poll(now))
         self._note_changes()
         self._send(self.flight.poll(now))
+        if self.mission_computer is not None:
+            self._sync_mission_computer(now)
+            self._on_handover(self.mission_computer.poll(now), now)
         if self._next_heartbeat is not None and now >= self._next_heartbeat:
             self._next_heartbeat = now + HEARTBEAT_PERIOD
             self.endpoint.send(self._heartbeat())
@@ -138,7 +167,8 @@ class VehicleNode:
     def next_deadline(self) -> float | None:
         best = self._next_heartbeat
         control = self.control.next_deadline() if self.control is not None else None
-        for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline(), control):
+        mc = self.mission_computer.next_deadline() if self.mission_computer is not None else None
+        for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline(), control, mc):
             if t is not None and (best is None or t < best):
                 best = t
         return best
@@ -152,10 +182,14 @@ class VehicleNode:
         hears every frame (the owner's HEARTBEATs keep it in control), keeps its own, and
         answers a GCS not in control in their place."""
         control = self.control
-        self._on_control(control.handle(frame, now))
-        if control.consumes(frame.msg):
-            return False
-        refusal = control.screen(frame)
+        refusal = self.gate.screen(frame) if self.gate is not None else None   # unknown GCSs: before the manager
+        if refusal is None:
+            self._on_control(control.handle(frame, now), now)
+            if self.mission_computer is not None:
+                self._on_handover(self.mission_computer.handle(frame, now), now)
+            if control.consumes(frame.msg):
+                return False
+            refusal = control.screen(frame)
         if refusal is None:
             return True
         self.refused += 1
@@ -164,7 +198,7 @@ class VehicleNode:
         self._send(list(refusal.actions))
         return False
 
-    def _on_control(self, actions: list[Any]) -> None:
+    def _on_control(self, actions: list[Any], now: float) -> None:
         """Send what the manager sends (CONTROL_STATUS, ACKs, forwarded requests); keep and
         log its events. Owner loss is also announced in a STATUSTEXT: the XML's "If all owning
         GCS are disconnected the vehicle should GCS loss failsafe, and broadcast a
@@ -181,6 +215,37 @@ class VehicleNode:
                 was = f" (was {action.previous})" if action.previous != action.owner else ""
                 takeover = "allowed" if action.takeover_allowed else "disallowed"
                 self.events.append(f"control: gcs_main {action.owner}{was}, takeover {takeover}: {action.reason}")
+                if self.mission_computer is not None:
+                    self._on_handover(self.mission_computer.control_changed(action, now), now)
+
+    # --- mission computer (VehicleConfig.handover) -----------------------------------------
+    def _sync_mission_computer(self, now: float) -> None:
+        """Tell the mission computer where the vehicle is and whether it flies (it does not
+        read the flight model itself)."""
+        mc = self.mission_computer
+        p = self.flight.where(now)
+        mc.observe(GeoPoint(p.lat, p.lon, p.alt), now)
+        if self.flight.flying and mc.state is McState.ON_LOAD:
+            mc.start(now, mission_waypoints(self.server.store.items(MissionType.MISSION)))
+        elif not self.flight.flying and mc.state is not McState.ON_LOAD:
+            mc.stop(now)
+
+    def _on_handover(self, actions: list[Any], now: float) -> None:
+        """Send the mission computer's messages (invitations, connect notices, STATUSTEXT),
+        withdraw what an aborted handover left open in the manager, keep and log its events."""
+        for action in self.endpoint.send_all(actions):
+            if isinstance(action, WithdrawTakeover):
+                self._on_control(self.control.withdraw(action.requester, now), now)
+                continue
+            self.handover_events.append(action)
+            if isinstance(action, HandoverStarted):
+                self.events.append(f"handover: GCS {action.commander} -> GCS {action.partner} started "
+                                   f"(region {action.region})")
+            elif isinstance(action, HandoverFinished):
+                r = action.result
+                detail = f": {r.detail}" if r.detail else ""
+                self.events.append(f"handover: GCS {r.commander} -> GCS {r.partner} {r.outcome.value} "
+                                   f"after {r.duration:.2f} s, gcs_main {r.owner}{detail}")
 
     # --- internals ------------------------------------------------------------------------
     def _plan_state(self) -> tuple:

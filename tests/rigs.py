@@ -11,6 +11,7 @@ from typing import Callable
 
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
 from mavconform.reference_impl.handover.control_client import Policy
+from mavconform.reference_impl.handover.gcs_handover import HandoverAgent
 from mavconform.reference_impl.net import FaultModel, SimNetwork
 from mavconform.reference_impl.session import GcsSession
 from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
@@ -59,10 +60,12 @@ class Fleet:
 
 def vehicle_and_gcss(vehicle: VehicleConfig | None, gcss: dict[str, GcsConfig], *,
                      policies: dict[str, Policy] | None = None, link: FaultModel | None = None,
-                     seed: int = 0, discovery: float = 5.0) -> Fleet:
+                     seed: int = 0, discovery: float = 5.0,
+                     handovers: dict[str, HandoverAgent] | None = None) -> Fleet:
     """A vehicle and one GCS per entry of `gcss` (name -> config; `policies` answers
-    forwarded requests for control; `link` is every link's faults, both ways), every GCS
-    having heard the vehicle's HEARTBEAT."""
+    forwarded requests for control; `handovers` gives a GCS a handover agent, whose policy
+    then answers them; `link` is every link's faults, both ways), every GCS having heard the
+    vehicle's HEARTBEAT."""
     net = SimNetwork(seed=seed)
     node = VehicleNode(vehicle, wall_clock=net.clock.wall)
     net.add_node("vehicle", node)
@@ -70,7 +73,8 @@ def vehicle_and_gcss(vehicle: VehicleConfig | None, gcss: dict[str, GcsConfig], 
     for name, config in gcss.items():
         policy = (policies or {}).get(name)
         gcs = GcsNode(config, remote="vehicle", wall_clock=net.clock.wall,
-                      **({"control_policy": policy} if policy is not None else {}))
+                      **({"control_policy": policy} if policy is not None else {}),
+                      handover=(handovers or {}).get(name))
         net.add_node(name, gcs)
         net.connect(name, "vehicle", a_to_b=link, b_to_a=link.copy() if link is not None else None)
         sessions[name] = GcsSession(net, gcs)

@@ -220,6 +220,7 @@ class ControlClient:
             out.append(StatusChanged(self.owner, previous, self.takeover_allowed))
         if not self.in_control:
             self._revert_at = None   # control moved away: nothing left to revert
+            self._forwarded = None   # nor to answer: a later forward from the same GCS is a new one
         op = self._op
         if self.state is _C.WAITING_FOR_OWNER and op is not None:
             if self.in_control:

@@ -248,6 +248,18 @@ class ControlManager:
             return Refusal(f"{name}: {who}", ())
         return None
 
+    def withdraw(self, requester: int, now: float) -> list[Action]:
+        """End a forwarded request from `requester`, or a takeover window opened for it, now,
+        as if it had timed out (the table's REQUEST_EXPIRED / WINDOW_CLOSED): the vehicle's
+        mission computer gave up a handover, which must not complete later."""
+        if self._pending is not None and self._pending.requester[0] == requester:
+            self._pending = None
+            self._move(_E.REQUEST_EXPIRED)
+            return []
+        if self._window_until is not None and self.window_for == requester:
+            return self._change(self._close_window, f"takeover window for GCS {requester} withdrawn", now)
+        return []
+
     # --- requests -------------------------------------------------------------------------
     def _on_request(self, msg: Any, src: Peer, now: float) -> list[Action]:
         sysid = src[0]

@@ -8,6 +8,11 @@ what a test tool needs on top of it:
   what an unsigned or badly signed frame means (handover gating needs to see them);
 - a bad signature never moves the stream's timestamp (pymavlink records it before it
   compares signatures, which would let a forged frame lock out the real sender);
+- with a `Keyring`, one key per system id: a signed frame is checked against the key of the
+  system it claims, and an INVALID verdict says why (`SignatureFault`: bad signature,
+  replayed, unknown key). Each system's key keeps its own replay state, per (system,
+  component, link id) stream as the signing guide says, and its own local timestamp for the
+  one-minute rule, so one GCS whose clock runs ahead cannot make another's frames look stale;
 - time from an injected wall clock, so signed traffic is deterministic in virtual time.
 """
 
@@ -19,8 +24,8 @@ import struct
 import time
 from typing import Any, Callable, Iterable
 
-from .frame import DecodeError, Frame, SignatureVerdict
-from .signing import SigningKey, signing_timestamp
+from .frame import DecodeError, Frame, SignatureFault, SignatureVerdict
+from .signing import NEW_STREAM_WINDOW, Keyring, SigningKey, signing_timestamp
 
 MAGIC_V1 = 0xFE
 MAGIC_V2 = 0xFD
@@ -115,31 +120,47 @@ class FrameDecoder:
         self,
         *,
         dialect: Any = None,
-        signing: SigningKey | None = None,
+        signing: SigningKey | Keyring | None = None,
         wall_clock: WallClock = time.time,
     ) -> None:
         self.dialect = dialect or default_dialect()
         self._wall_clock = wall_clock
         self._mav = self.dialect.MAVLink(None, 0, 0)
         self._plain = self._mav  # the keyless decoder, used while signing is off
+        self._checker = self.dialect.MAVLink(None, 0, 0)   # signature-only checks (see _genuine)
+        self._keyring: Keyring | None = None
+        self._by_system: dict[int, Any] = {}   # with a keyring: one keyed decoder per system id
         self._unknown = self.dialect.MAVLink_unknown
         self.frames = 0
         self.errors = 0
         self.bad_signatures = 0
         self.set_signing(signing)
 
-    def set_signing(self, key: SigningKey | None) -> None:
+    def set_signing(self, key: SigningKey | Keyring | None) -> None:
+        """One key for every sender, a keyring (a key per system id), or none (signed frames
+        are then UNCHECKED). Replay state starts afresh."""
+        self._keyring, self._by_system = None, {}
         if key is None:
             self._mav = self._plain
-            return
-        self._mav = self.dialect.MAVLink(None, 0, 0)
-        self._mav.signing.secret_key = key.secret
+        elif isinstance(key, Keyring):
+            self._mav, self._keyring = self._plain, key
+        else:
+            self._mav = self._keyed(key)
+
+    def _keyed(self, key: SigningKey) -> Any:
+        mav = self.dialect.MAVLink(None, 0, 0)
+        mav.signing.secret_key = key.secret
         # Accept everything at pymavlink's level; the verdict is ours to give.
-        self._mav.signing.allow_unsigned_callback = _accept_all
+        mav.signing.allow_unsigned_callback = _accept_all
+        return mav
 
     @property
     def signing_enabled(self) -> bool:
-        return self._mav.signing.secret_key is not None
+        return self._keyring is not None or self._mav.signing.secret_key is not None
+
+    @property
+    def keyring(self) -> Keyring | None:
+        return self._keyring
 
     def feed(self, data: bytes) -> list[Frame | DecodeError]:
         """Every frame and every error in one datagram, in order."""
@@ -192,6 +213,15 @@ class FrameDecoder:
         mav = self._mav
         signed = bool(iflags & IFLAG_SIGNED)
         stream_key = saved_ts = None
+        stale = no_key = False
+        if signed and self._keyring is not None:
+            mav = self._by_system.get(chunk[5])
+            if mav is None:
+                key = self._keyring.key_for(chunk[5])
+                if key is None:
+                    mav, no_key = self._plain, True
+                else:
+                    mav = self._by_system[chunk[5]] = self._keyed(key)
         if signed and mav.signing.secret_key is not None:
             # (link_id, sys, comp): pymavlink's per-link timestamp key.
             stream_key = (chunk[-13], chunk[5], chunk[6])
@@ -199,6 +229,9 @@ class FrameDecoder:
             now = signing_timestamp(self._wall_clock())
             if now > mav.signing.timestamp:
                 mav.signing.timestamp = now
+            # pymavlink's timestamp rules, read ahead so a refusal can say "replayed"
+            ts = int.from_bytes(chunk[-12:-6], "little")
+            stale = ts <= saved_ts if saved_ts is not None else ts + NEW_STREAM_WINDOW < mav.signing.timestamp
         try:
             msg = mav.decode(bytearray(chunk))
         except Exception as exc:  # pymavlink raises MAVError, struct.error, ValueError...
@@ -207,8 +240,12 @@ class FrameDecoder:
             # pymavlink's MAVLink_unknown carries id -2 in its header; read the id off the wire.
             msgid = chunk[5] if chunk[0] == MAGIC_V1 else chunk[7] | chunk[8] << 8 | chunk[9] << 16
             return self._error(f"unknown message id {msgid}", chunk)
+        fault = None
         if not signed:
             verdict = SignatureVerdict.UNSIGNED
+        elif no_key:
+            verdict, fault = SignatureVerdict.INVALID, SignatureFault.UNKNOWN_KEY
+            self.bad_signatures += 1
         elif stream_key is None:
             verdict = SignatureVerdict.UNCHECKED
         elif msg._signed:
@@ -220,9 +257,19 @@ class FrameDecoder:
                 mav.signing.stream_timestamps.pop(stream_key, None)
             else:
                 mav.signing.stream_timestamps[stream_key] = saved_ts
+            fault = SignatureFault.REPLAYED if stale and self._genuine(mav, chunk) else SignatureFault.BAD_SIGNATURE
         self.frames += 1
         h = msg._header
-        return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None)
+        return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None, fault)
+
+    def _genuine(self, mav: Any, chunk: bytes) -> bool:
+        """Whether the signature itself is right for `mav`'s key, whatever its timestamp: the
+        difference between a replayed frame and a forged one. pymavlink's own check, run on a
+        scratch decoder with no stream history (only reached for refused frames)."""
+        checker = self._checker.signing
+        checker.secret_key, checker.timestamp = mav.signing.secret_key, 0
+        checker.stream_timestamps.clear()
+        return bool(self._checker.check_signature(bytearray(chunk), chunk[5], chunk[6]))
 
     def _error(self, reason: str, raw: bytes) -> DecodeError:
         self.errors += 1

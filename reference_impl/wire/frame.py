@@ -20,6 +20,16 @@ class SignatureVerdict(Enum):
     UNCHECKED = "unchecked"  # signed, but this decoder holds no key to check it
 
 
+class SignatureFault(Enum):
+    """Why a signed frame is INVALID, so the layer above can count and log each kind apart
+    (a replay says someone records the link; a bad signature, that someone forges)."""
+
+    BAD_SIGNATURE = "bad signature"  # the claimed sender's key does not give it: another key, or tampered
+    REPLAYED = "replayed"            # a genuine signature, but not newer than its stream's last frame
+                                     # (or a new stream more than a minute behind our clock)
+    UNKNOWN_KEY = "unknown key"      # signed, claiming a system the decoder's keyring has no key for
+
+
 @dataclass(slots=True)
 class Frame:
     """One decoded MAVLink frame: header fields, the message, raw bytes, signature verdict.
@@ -35,6 +45,15 @@ class Frame:
     src_component: int
     signature: SignatureVerdict = SignatureVerdict.UNSIGNED
     link_id: int | None = None
+    fault: SignatureFault | None = None   # set exactly when `signature` is INVALID
+
+    @property
+    def authenticity(self) -> str:
+        """One label per frame for counters and logs: "ok", "unsigned", "unchecked", or the
+        fault ("bad signature", "replayed", "unknown key")."""
+        if self.fault is not None:
+            return self.fault.value
+        return "ok" if self.signature is SignatureVerdict.VALID else self.signature.value
 
     @property
     def name(self) -> str:

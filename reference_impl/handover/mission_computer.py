@@ -1,0 +1,529 @@
+"""The thesis's mission computer on the vehicle, as a sans-IO state machine (seed 003, ch. 4).
+
+Two rules, after h11's `_state.py`:
+- Every change of `state` and of a handover's phase goes through `_move` / `_step`, which
+  consult `MC_TRANSITIONS` / `PHASE_TRANSITIONS`; a move the tables lack is a bug here.
+- No I/O, no clock, no flight model: positions come in with their times (`observe`), frames
+  and the system manager's `ControlChanged` events with `now`; out go `Send` actions, a
+  `WithdrawTakeover` request for the manager, and `HandoverStarted` / `HandoverFinished`.
+
+Theory of operation. The mission computer knows the parent GCS and every GCS's coverage
+(circle, polygon, or the waypoints it owns). From MISSION_STARTED (on_load -> on_mission) it
+checks the latest position every `check_period` (the thesis's 50 ms). Each handover region
+has a `Latch` (hysteresis.py: margin and dwell): for the geographic methods one per pair of
+GCSs, the intersection of their coverages; for the waypoint method one per GCS, "the leg the
+vehicle flies is this GCS's" (the last waypoint reached within the acceptance radius). When a
+region is entered and the commander (the manager's `gcs_main`) is one of its pair, or is not
+the leg's owner, the handover toward the other GCS starts (on_handover), exactly once per
+entry. The six steps run over MAVLink operator control (docs/handover.md):
+
+1. the vehicle invites the partner: MAV_CMD_REQUEST_OPERATOR_CONTROL to it, param4 its own id;
+2. the partner requests control; the manager refuses it and forwards it to the commander;
+3. the commander allows takeover (CONTROL_STATUS: takeover allowed) or releases;
+4. the partner's request is granted (CONTROL_STATUS: gcs_main = partner): the commit;
+   the vehicle sends the partner the connect notice (the same command, now to the owner);
+5. the partner's COMMAND_ACK of the notice: it hears the vehicle as the owner;
+6. the old commander's release (param1 0), sent when it sees it lost control.
+
+Bound. A handover ends within `bound` seconds of its start: not committed by
+`start + bound - closing_timeout`, it is aborted and the vehicle withdraws the forwarded request
+or open takeover window (`WithdrawTakeover`), so the old commander keeps control; committed,
+it ends COMPLETED when 5 and 6 are seen, else UNCONFIRMED at `start + bound` (control is not
+taken back: the partner was told it holds control, the commander that it does not).
+Leaving the region before the commit aborts too.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Mapping, Sequence
+
+from ..mission.actions import Send
+from ..mission.constants import POSITIONAL_COMMANDS
+from ..mission.items import GLOBAL_FRAMES, MissionItem
+from ..state_table import next_state
+from ..wire.dialect import mavlink as _d
+from ..wire.frame import Frame
+from . import control_messages as cm
+from .control_results import ControlChanged
+from .geo import GeoPoint
+from .hysteresis import Edge, Latch, Presence, Sense, sense_of, sense_when
+from .mission_computer_transitions import (COMMITTED, MC_TRANSITIONS, PHASE_STEP, PHASE_TRANSITIONS,
+                                           HandoverOutcome, HandoverPhase, McEvent, McState, PhaseEvent)
+from .regions import Circle, Intersection, OwnedWaypoints, Polygon, RegionMethod, WaypointOwnership
+from .waypoints import waypoint_reached
+
+__all__ = ["HandoverFinished", "HandoverResult", "HandoverStarted", "MissionComputer", "MissionComputerConfig",
+           "WithdrawTakeover", "critical_path_budget", "mission_waypoints"]
+
+THESIS_CHECK_PERIOD = 0.05   # s: "The third task runs each 50 milliseconds" (4.3.2)
+MAX_RESULTS = 1000
+
+
+@dataclass(frozen=True)
+class MissionComputerConfig:
+    """What the mission computer is loaded with (4.3.1: "GCS Parameters; GCS Geofences").
+
+    `coverages` maps each GCS's system id to its coverage under one region method (a
+    `Circle`, a `Polygon`, or the `OwnedWaypoints` it owns); a mapping is stored as sorted
+    pairs so the config stays hashable. The default bound: see docs/handover.md, "Bound".
+    """
+
+    parent: int
+    coverages: Any                        # Mapping[int, Coverage] in, tuple of pairs kept
+    check_period: float = THESIS_CHECK_PERIOD
+    dwell: float = 1.0                    # s inside (and outside) before an entry (exit) counts
+    margin_m: float = 0.0                 # geographic methods: the Schmitt band around the edge
+    acceptance_radius_m: float = 10.0     # waypoint method: "reached" within this distance
+    bound: float = 40.0                   # s: every handover ends within this of its start
+    closing_timeout: float | None = None  # s of the bound kept for steps 5-6 (None: bound / 4)
+    resend_period: float = 1.0            # s between resends of the invitation / connect notice
+    resends: int = 5                      # resends of each at most
+
+    def __post_init__(self) -> None:
+        pairs = self.coverages.items() if isinstance(self.coverages, Mapping) else self.coverages
+        pairs = tuple(sorted((int(k), v) for k, v in pairs))
+        object.__setattr__(self, "coverages", pairs)
+        ids = [k for k, _ in pairs]
+        if len(ids) < 2:
+            raise ValueError("a handover needs coverage for at least two GCSs")
+        if len(set(ids)) != len(ids) or not all(1 <= k <= 255 for k in ids):
+            raise ValueError(f"GCS system ids must be distinct, in 1..255: {ids}")
+        if self.parent not in ids:
+            raise ValueError(f"the parent GCS {self.parent} has no coverage")
+        kinds = {type(v) for _, v in pairs}
+        geographic = kinds <= {Circle, Polygon, Intersection}
+        if not (geographic or kinds == {OwnedWaypoints}):
+            raise ValueError("every GCS's coverage must be of one region method: circles/polygons, or waypoints, "
+                             f"got {sorted(k.__name__ for k in kinds)}")
+        if not geographic:
+            WaypointOwnership.from_coverages({str(k): v for k, v in pairs})   # a waypoint owned twice
+            if self.margin_m:
+                raise ValueError("margin_m is for circles and polygons; the waypoint method has the "
+                                 "acceptance radius")
+        for name in ("check_period", "resend_period", "bound"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise ValueError(f"{name} must be a positive number of seconds, got {getattr(self, name)!r}")
+        for name in ("dwell", "margin_m", "acceptance_radius_m"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
+        closing = self.closing
+        if not 0 < closing < self.bound:
+            raise ValueError(f"closing_timeout {closing!r} must be more than 0 and less than the bound {self.bound!r}")
+        if self.resends < 0:
+            raise ValueError("resends must be >= 0")
+
+    @property
+    def closing(self) -> float:
+        return self.bound / 4 if self.closing_timeout is None else self.closing_timeout
+
+    @property
+    def commit_timeout(self) -> float:
+        """Seconds from a handover's start by which control must have moved, or it aborts."""
+        return self.bound - self.closing
+
+    @property
+    def method(self) -> RegionMethod:
+        kinds = {type(v) for _, v in self.coverages}
+        if kinds == {OwnedWaypoints}:
+            return RegionMethod.WAYPOINTS
+        return RegionMethod.CIRCLE if kinds == {Circle} else RegionMethod.POLYGON
+
+    @property
+    def gcs_ids(self) -> tuple[int, ...]:
+        return tuple(k for k, _ in self.coverages)
+
+    def coverage(self, sysid: int) -> Any:
+        return dict(self.coverages)[sysid]
+
+
+# --- what the mission computer reports -------------------------------------------------------
+@dataclass(frozen=True)
+class WithdrawTakeover:
+    """Ask the system manager to end a forwarded request from, or a takeover window for,
+    `requester` now (an aborted handover must not complete later)."""
+
+    requester: int
+    reason: str
+
+
+@dataclass(frozen=True)
+class HandoverStarted:
+    commander: int
+    partner: int
+    region: str
+    at: float
+
+
+@dataclass(frozen=True)
+class HandoverResult:
+    outcome: HandoverOutcome
+    commander: int                 # the commander when the handover started
+    partner: int
+    owner: int                     # gcs_main when it ended
+    started: float
+    finished: float
+    steps: tuple[tuple[int, float], ...]   # (thesis step, first seen) in order of step
+    detail: str = ""
+
+    @property
+    def duration(self) -> float:
+        return self.finished - self.started
+
+
+@dataclass(frozen=True)
+class HandoverFinished:
+    result: HandoverResult
+
+
+Action = Send | WithdrawTakeover | HandoverStarted | HandoverFinished
+
+
+def critical_path_budget(manager: Any, client: Any, *, resend_period: float = 1.0, resends: int = 5,
+                         latency: float = 0.05) -> tuple[float, float]:
+    """(commit, closing): how long steps 1-4 and 5-6 take when every message on the critical
+    path gets through only on its last resend (each hop `latency` one way). `manager` is the
+    vehicle's ManagerConfig, `client` the GCSs' ClientConfig. The default bound covers this
+    with the engines' defaults (docs/handover.md, "Bound"; a test holds it to that)."""
+    last = client.ack_timeout * client.max_retries            # a GCS command's last resend
+    commit = (resend_period * resends                         # 1: invitation
+              + last                                          # 2: the partner's request
+              + manager.notify_timeout * manager.notify_retries   # 2: the forward to the commander
+              + last                                          # 3: the commander's allow
+              + manager.status_period + last                  # 4: CONTROL_STATUS, then the request again
+              + 6 * latency)
+    closing = max(resend_period * resends + latency,          # 5: connect notice and its ACK
+                  manager.status_period + last + latency)     # 6: CONTROL_STATUS, then the release
+    return commit, closing
+
+
+def mission_waypoints(items: Iterable[MissionItem]) -> tuple[tuple[int, GeoPoint], ...]:
+    """The mission's positional items as (seq, point), for the waypoint method's reach check."""
+    return tuple((it.seq, GeoPoint.from_e7(it.x, it.y)) for it in items
+                 if it.command in POSITIONAL_COMMANDS and it.frame in GLOBAL_FRAMES)
+
+
+# --- internals ---------------------------------------------------------------------------------
+@dataclass
+class _Watch:
+    """One handover region: a pair of GCSs (geographic) or one GCS's legs (waypoints)."""
+
+    gcs: tuple[int, ...]
+    region: Any                     # the Intersection (geographic) or None (waypoints)
+    latch: Latch | None = None      # made at the first check after the start
+    used: bool = False              # this entry already started a handover
+
+    @property
+    def name(self) -> str:
+        return "+".join(map(str, self.gcs)) if len(self.gcs) > 1 else f"legs of {self.gcs[0]}"
+
+    def partner_for(self, commander: int) -> int | None:
+        if not commander:
+            return None
+        if len(self.gcs) == 1:
+            return self.gcs[0] if self.gcs[0] != commander else None
+        if commander in self.gcs:
+            return next(g for g in self.gcs if g != commander)
+        return None
+
+
+@dataclass
+class _Attempt:
+    commander: int
+    partner: int
+    watch: _Watch
+    started: float
+    commit_by: float
+    end_by: float
+    phase: HandoverPhase = HandoverPhase.INVITING
+    steps: dict[int, float] = field(default_factory=dict)
+    resend_at: float | None = None
+    resends_left: int = 0
+    sent: int = 0                   # invitations / notices sent, for `confirmation`
+    released_at: float | None = None   # the commander released before the grant (steps 3 and 6)
+    notice_sent: bool = False
+
+    @property
+    def committed(self) -> bool:
+        return self.phase in COMMITTED
+
+
+class MissionComputer:
+    """Vehicle-side handover: `observe` positions, `handle` frames, `control_changed` events,
+    `poll` timers; send and apply what they return."""
+
+    def __init__(self, system: int, component: int, config: MissionComputerConfig, *,
+                 record_history: bool = False) -> None:
+        self.system = system
+        self.component = component
+        self.config = config
+        self.state = McState.ON_LOAD
+        self.commander = 0                      # gcs_main, as the manager last said
+        self.attempt: _Attempt | None = None
+        self.results: list[HandoverResult] = []
+        self.recent: deque[tuple[Any, Any, Any]] = deque(maxlen=256)
+        self.history: list[tuple[Any, Any, Any]] = []
+        self._record = record_history
+        self._position: tuple[GeoPoint, float] | None = None
+        self._next_check: float | None = None
+        self._watches: list[_Watch] = []
+        self._ending = False
+        self._waypoints: tuple[tuple[int, GeoPoint], ...] = ()
+        self._next_wp = 0
+        self.leg_owner: int | None = None
+        self._seq_owner = {seq: g for g, cov in config.coverages if isinstance(cov, OwnedWaypoints)
+                           for seq in cov.seqs}
+
+    # --- inputs ---------------------------------------------------------------------------
+    def start(self, now: float, waypoints: Sequence[tuple[int, GeoPoint]] = ()) -> list[Action]:
+        """The flight started (on_load -> on_mission). `waypoints`: the mission's positional
+        items in order, for the waypoint method (`mission_waypoints`)."""
+        if self.state is not McState.ON_LOAD:
+            return []
+        self._move(McEvent.MISSION_STARTED)
+        self._waypoints, self._next_wp, self.leg_owner = tuple(waypoints), 0, None
+        self._watches = self._make_watches()
+        self._next_check = now
+        self._ending = False
+        return []
+
+    def stop(self, now: float) -> list[Action]:
+        """The flight ended. A handover under way runs to its end first."""
+        if self.state is McState.ON_HANDOVER:
+            self._ending = True
+        elif self.state is McState.ON_MISSION:
+            self._end_mission()
+        return []
+
+    def observe(self, point: GeoPoint, at: float) -> None:
+        """The vehicle's position at time `at` (older than the last one: dropped)."""
+        if self._position is None or at >= self._position[1]:
+            self._position = (point, at)
+
+    def control_changed(self, change: ControlChanged, now: float) -> list[Action]:
+        """The system manager changed gcs_main or the takeover flag (its CONTROL_STATUS)."""
+        previous, self.commander = self.commander, change.owner
+        a = self.attempt
+        if a is None:
+            if change.owner != previous:
+                self._move(McEvent.CONTROL_MOVED)
+            return []
+        owner = change.owner
+        if a.committed:
+            if owner != a.partner:
+                return self._finish(HandoverOutcome.UNCONFIRMED, now,
+                                    f"control moved on to GCS {owner} before steps 5-6 were seen")
+            return []
+        if owner == a.partner:
+            return self._commit(now)
+        if owner == 0:
+            a.released_at = now if a.released_at is None else a.released_at
+            self._step(PhaseEvent.COMMANDER_RELEASED, now)
+        elif owner == a.commander:
+            if change.takeover_allowed:
+                self._step(PhaseEvent.COMMANDER_ALLOWED, now)
+        else:
+            return self._finish(HandoverOutcome.ABORTED, now, f"control went to GCS {owner}, not the partner")
+        return []
+
+    def handle(self, frame: Frame, now: float) -> list[Action]:
+        """Frames the system manager has seen: the partner's request and ACKs, the old
+        commander's release. Anything else is not the mission computer's business."""
+        a = self.attempt
+        msg = frame.msg
+        if a is None or not cm.addressed_to(msg, self.system, self.component):
+            return []
+        sender = frame.source[0]
+        if msg._type == "COMMAND_ACK" and msg.command == cm.REQUEST_CONTROL and sender == a.partner:
+            if not a.committed:
+                a.resend_at = None           # the invitation arrived
+            elif a.notice_sent:
+                a.resend_at = None
+                self._step(PhaseEvent.PARTNER_CONFIRMED, now)
+        elif cm.is_request_control(msg):
+            if sender == a.partner and msg.param1 == cm.ACTION_REQUEST and not a.committed:
+                a.resend_at = None
+                if self.commander not in (0, a.partner):
+                    self._step(PhaseEvent.PARTNER_REQUESTED, now)
+            elif sender == a.commander and msg.param1 == cm.ACTION_RELEASE and a.committed:
+                self._step(PhaseEvent.COMMANDER_DISCONNECTED, now)
+        return self._finish_if_done(now)
+
+    def poll(self, now: float) -> list[Action]:
+        out: list[Action] = []
+        a = self.attempt
+        if a is not None:
+            if not a.committed and now >= a.commit_by:
+                out += self._finish(HandoverOutcome.ABORTED, now,
+                                    f"control not granted to GCS {a.partner} within {self.config.commit_timeout:g} s")
+            elif a.committed and now >= a.end_by:
+                missing = [s for s in (5, 6) if s not in a.steps]
+                out += self._finish(HandoverOutcome.UNCONFIRMED, now,
+                                    f"step(s) {', '.join(map(str, missing))} not seen within {self.config.bound:g} s")
+            elif a.resend_at is not None and now >= a.resend_at:
+                a.resends_left -= 1
+                a.resend_at = now + self.config.resend_period if a.resends_left > 0 else None
+                out.append(self._notice(a, now))
+        if self._next_check is not None and now >= self._next_check:
+            self._next_check = now + self.config.check_period
+            out += self._check(now)
+        return out
+
+    def next_deadline(self) -> float | None:
+        times = [self._next_check]
+        a = self.attempt
+        if a is not None:
+            times += [a.resend_at, a.end_by if a.committed else a.commit_by]
+        present = [t for t in times if t is not None]
+        return min(present) if present else None
+
+    # --- the region check -----------------------------------------------------------------
+    def _make_watches(self) -> list[_Watch]:
+        cfg = self.config
+        if cfg.method is RegionMethod.WAYPOINTS:
+            return [_Watch((g,), None) for g in cfg.gcs_ids]
+        ids = cfg.gcs_ids
+        return [_Watch((x, y), Intersection((cfg.coverage(x), cfg.coverage(y))))
+                for i, x in enumerate(ids) for y in ids[i + 1:]]
+
+    def _sense(self, w: _Watch, point: GeoPoint) -> Sense:
+        if w.region is None:
+            return sense_when(self.leg_owner == w.gcs[0])
+        return sense_of(w.region, point, self.config.margin_m)
+
+    def _check(self, now: float) -> list[Action]:
+        """The 50 ms task: where is the vehicle, which region did it enter or leave."""
+        if self._position is None:
+            return []
+        point, at = self._position
+        if self._waypoints:
+            self._reach(point)
+        out: list[Action] = []
+        for w in self._watches:
+            sense = self._sense(w, point)
+            if w.latch is None:
+                # a region the flight starts in was not entered: no handover for it
+                inside = sense is not Sense.OUTSIDE
+                w.latch = Latch(self.config.dwell, initial=Presence.IN if inside else Presence.OUT,
+                                on_move=self._latch_moved)
+                w.used = inside
+                continue
+            if w.latch.observe(sense, at) is Edge.EXITED:
+                w.used = False
+                a = self.attempt
+                if a is not None and a.watch is w and not a.committed:
+                    out += self._finish(HandoverOutcome.ABORTED, now, f"left region {w.name} before the grant")
+        if self.state is McState.ON_MISSION:
+            out += self._maybe_start(now)
+        return out
+
+    def _reach(self, point: GeoPoint) -> None:
+        """The thesis's second method: the next waypoint is reached within the acceptance
+        radius; the leg that starts there is its owner's."""
+        wps, radius = self._waypoints, self.config.acceptance_radius_m
+        while self._next_wp < len(wps) and waypoint_reached(point, wps[self._next_wp][1], radius):
+            self.leg_owner = self._seq_owner.get(wps[self._next_wp][0])
+            self._next_wp += 1
+
+    def _maybe_start(self, now: float) -> list[Action]:
+        for w in self._watches:
+            if w.used or w.latch is None or w.latch.state is not Presence.IN:
+                continue
+            partner = w.partner_for(self.commander)
+            if partner is not None:
+                w.used = True
+                return self._start(w, partner, now)
+        return []
+
+    # --- the sequence ---------------------------------------------------------------------
+    def _start(self, w: _Watch, partner: int, now: float) -> list[Action]:
+        cfg = self.config
+        self._move(McEvent.HANDOVER_DUE)
+        a = self.attempt = _Attempt(self.commander, partner, w, now, now + cfg.commit_timeout, now + cfg.bound)
+        a.steps[1] = now
+        a.resends_left = cfg.resends
+        a.resend_at = now + cfg.resend_period if cfg.resends else None
+        text = cm.statustext(_d.MAV_SEVERITY_INFO, f"Handover {a.commander}->{partner} started")
+        return [HandoverStarted(a.commander, partner, w.name, now), self._notice(a, now), Send(text)]
+
+    def _notice(self, a: _Attempt, now: float) -> Send:
+        """Step 1's invitation before the commit, step 4's connect notice after it: the
+        operator-control command, to the partner, naming the partner (param4). Param 3 is
+        the time left (clamped to the XML's 3..60 s): the partner's request timeout."""
+        left = (a.end_by if a.committed else a.commit_by) - now
+        timeout = min(max(left, cm.TIMEOUT_MIN), cm.TIMEOUT_MAX)
+        msg = cm.request_command((a.partner, 0), cm.ACTION_REQUEST, False, timeout, a.partner,
+                                 confirmation=min(a.sent, 255))
+        a.sent += 1
+        return Send(msg, (a.partner, 0))
+
+    def _commit(self, now: float) -> list[Action]:
+        a = self.attempt
+        self._step(PhaseEvent.GRANTED, now)
+        if a.released_at is not None:
+            self._step(PhaseEvent.COMMANDER_DISCONNECTED, a.released_at)
+        a.sent, a.notice_sent = 0, True
+        a.resends_left = self.config.resends
+        a.resend_at = now + self.config.resend_period if self.config.resends else None
+        return [self._notice(a, now)]
+
+    def _step(self, event: PhaseEvent, now: float) -> None:
+        a = self.attempt
+        old = a.phase
+        a.phase = next_state(PHASE_TRANSITIONS, old, event, "handover sequence")
+        if a.phase is not old:
+            self._record_move(old, event, a.phase)
+        step = {PhaseEvent.PARTNER_CONFIRMED: 5, PhaseEvent.COMMANDER_DISCONNECTED: 6}.get(event, PHASE_STEP[a.phase])
+        if a.phase is not old or event in (PhaseEvent.PARTNER_CONFIRMED, PhaseEvent.COMMANDER_DISCONNECTED):
+            a.steps.setdefault(step, now)
+
+    def _finish_if_done(self, now: float) -> list[Action]:
+        a = self.attempt
+        if a is not None and a.phase is HandoverPhase.DONE:
+            return self._finish(HandoverOutcome.COMPLETED, now)
+        return []
+
+    def _finish(self, outcome: HandoverOutcome, now: float, detail: str = "") -> list[Action]:
+        a = self.attempt
+        assert a is not None
+        self.attempt = None
+        self._move({HandoverOutcome.COMPLETED: McEvent.COMPLETED, HandoverOutcome.UNCONFIRMED: McEvent.UNCONFIRMED,
+                    HandoverOutcome.ABORTED: McEvent.ABORTED}[outcome])
+        result = HandoverResult(outcome, a.commander, a.partner, self.commander, a.started, now,
+                                tuple(sorted(a.steps.items())), detail)
+        if len(self.results) < MAX_RESULTS:
+            self.results.append(result)
+        out: list[Action] = []
+        if outcome is HandoverOutcome.ABORTED:
+            out.append(WithdrawTakeover(a.partner, detail))
+        severity = _d.MAV_SEVERITY_INFO if outcome is HandoverOutcome.COMPLETED else _d.MAV_SEVERITY_WARNING
+        out += [HandoverFinished(result),
+                Send(cm.statustext(severity, f"Handover {a.commander}->{a.partner} {outcome.value}"))]
+        if self._ending:
+            self._end_mission()
+        else:
+            out += self._maybe_start(now)
+        return out
+
+    def _end_mission(self) -> None:
+        self._move(McEvent.MISSION_ENDED)
+        self._ending = False
+        self._next_check = None
+        self._watches = []
+
+    # --- bookkeeping ----------------------------------------------------------------------
+    def _move(self, event: McEvent) -> None:
+        old = self.state
+        self.state = next_state(MC_TRANSITIONS, old, event, "mission computer")
+        self._record_move(old, event, self.state)
+
+    def _latch_moved(self, old: Presence, event: Any, new: Presence) -> None:
+        if new is not old:
+            self._record_move(old, event, new)
+
+    def _record_move(self, old: Any, event: Any, new: Any) -> None:
+        self.recent.append((old, event, new))
+        if self._record:
+            self.history.append((old, event, new))
