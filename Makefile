@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test run run-profiles run-mavsdk demo fuzz fault-table bench clean
+.PHONY: setup test run run-profiles run-mavsdk demo fuzz fault-table vectors bench clean
 
 setup: $(VENV)/.installed
 
@@ -55,6 +55,14 @@ fuzz: setup          ## short bounded campaigns of both fuzz modes vs builtin:sp
 
 fault-table: setup   ## regenerate docs/fault-tolerance.md (the reference GCS vs QGC MockLink failure modes)
 	$(BIN)/mavconform fault-table --output docs/fault-tolerance.md
+
+# vectors: the committed golden vectors must equal a regeneration, byte for byte; then every
+# vector through our codec, and through the MAVLink C library (gcc) and gomavlib (Go; its
+# module comes from the Go module proxy on the first run), tools/vectors_crosscheck.py.
+vectors: setup       ## golden vectors: regenerate and compare, verify (ours), cross-check (C library, gomavlib)
+	$(BIN)/mavconform vectors generate --check
+	$(BIN)/mavconform vectors verify
+	$(BIN)/python tools/vectors_crosscheck.py
 
 bench: setup         ## figures, not pass/fail
 	$(BIN)/python bench/transfer_vs_codec.py
