@@ -262,7 +262,8 @@ def run(scenario: Scenario, profile: str, dialect: DialectInfo, *, seed: int = 0
     net.connect(GCS, VEHICLE, a_to_b=FaultModel(delay=LATENCY, rules=up),
                 b_to_a=FaultModel(delay=LATENCY, rules=down))
     vehicle.endpoint.add_address(GCS)      # it beats to the GCS from the start, as in-process targets do
-    capture = McapCapture(mcap_path) if mcap_path is not None else None
+    # uncompressed: committed bytes must not depend on the installed zstandard's version
+    capture = McapCapture(mcap_path, compress=False) if mcap_path is not None else None
     events: list[dict[str, Any]] = []
     recorder = _Recorder(events, dialect)
     rig = Rig(net, gcs, vehicle, capture)

@@ -93,7 +93,7 @@ class McapCapture:
     no clock; tests inject a fixed one."""
 
     def __init__(self, path: str | os.PathLike[str], *, dialect: Any = None,
-                 wall_clock: Callable[[], float] = time.time) -> None:
+                 wall_clock: Callable[[], float] = time.time, compress: bool = True) -> None:
         self.path = os.fspath(path)
         self._wall_clock = wall_clock
         self._decoder = FrameDecoder(dialect=dialect)
@@ -102,8 +102,9 @@ class McapCapture:
             self._stream: IO[bytes] = open(self.path, "wb")
         except OSError as exc:
             raise UsageError(f"cannot write capture file {self.path!r}: {exc.strerror}") from None
+        # compress=False: bytes that depend on no compressor's version (committed golden files)
         try:
-            self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
+            self._writer = Writer(self._stream, compression=CompressionType.ZSTD if compress else CompressionType.NONE)
         except Exception:  # zstandard missing: an uncompressed file is still a valid MCAP
             self._writer = Writer(self._stream, compression=CompressionType.NONE)
         self._writer.start(profile="", library="mavconform")

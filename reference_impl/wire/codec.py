@@ -86,8 +86,9 @@ class FrameEncoder:
         version = version or self.version
         mav = self._mav
         if version == 1:
-            if msg.id > 255:
-                raise ValueError(f"{msg.get_type()} (id {msg.id}) cannot be sent as MAVLink 1")
+            msg_id = type(msg).id   # the class's: STATUSTEXT's own `id` field shadows it on the instance
+            if msg_id > 255:
+                raise ValueError(f"{msg.get_type()} (id {msg_id}) cannot be sent as MAVLink 1")
             if mav.signing.sign_outgoing:
                 raise ValueError("MAVLink 1 frames cannot be signed")
         elif mav.signing.sign_outgoing:

@@ -523,3 +523,13 @@ def test_mavlink1_frames_carry_only_base_fields():
     for cls, base in ((d.MAVLink_mission_item_int_message, 37), (d.MAVLink_mission_current_message, 2),
                       (d.MAVLink_mission_ack_message, 3), (d.MAVLink_heartbeat_message, 9)):
         assert base_payload_length(cls) == base
+
+
+def test_a_statustext_whose_chunk_id_is_over_255_still_goes_out_as_mavlink_1() -> None:
+    """STATUSTEXT has a field called `id` that shadows the message id on the instance: the
+    MAVLink 1 check must read the message's id (253), not the chunk id."""
+    from mavconform.reference_impl.wire.codec import FrameDecoder, FrameEncoder
+    from mavconform.reference_impl.wire.dialect import mavlink as d
+    data = FrameEncoder(1, 1).encode(d.MAVLink_statustext_message(6, b"hello", 300, 0), version=1)
+    (frame,) = [f for f in FrameDecoder().feed(data) if getattr(f, "msg", None) is not None]
+    assert data[0] == 0xFE and frame.msg.get_type() == "STATUSTEXT" and frame.msg.text == "hello"
