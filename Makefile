@@ -13,8 +13,8 @@ $(VENV)/.installed: pyproject.toml
 	$(BIN)/python -m pip install --quiet -e .
 	touch $@
 
-test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores)
-	$(BIN)/python -m pytest
+test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores), spread over the cores
+	$(BIN)/python -m pytest -n auto
 
 run: setup           ## the main job: the conformance suite vs builtin:spec over UDP loopback -> reports/out/
 	$(BIN)/mavconform run --target builtin:spec --report-dir reports/out
