@@ -78,6 +78,7 @@ class CampaignOptions:
     profile: str | None = None      # UDP targets: the vehicle profile the oracles apply
     restart_cmd: str | None = None  # a shell command that restarts a crashed target
     restart_timeout: float = RESTART_TIMEOUT
+    handover: bool = False          # protocol mode: operator control on (control steps and invariants)
 
 
 @dataclass
@@ -167,6 +168,9 @@ def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], No
                              "its own profile")
         from mavconform.reference_impl.profiles import load_profile
         load_profile(options.profile)    # a bad name or file: say so before searching
+    if options.handover and options.mode != "protocol":
+        raise UsageError(f"--operator-control applies to --mode protocol (operator control is fuzzed as GCS "
+                         f"operations, not as {options.mode})")
     mode = load_mode(options.mode)
     started = dt.datetime.now(dt.timezone.utc)
     progress = Progress()
@@ -186,6 +190,8 @@ def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], No
     extra: dict[str, Any] = {"capture": ring}
     if options.profile is not None:
         extra["profile"] = options.profile
+    if options.handover:
+        extra["handover"] = True
     interrupted_at: str | None = None
     try:
         with shrink_time_limit(shrink):
@@ -237,11 +243,20 @@ def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], No
         except KeyboardInterrupt:
             interrupted_at = interrupted_at or "saving findings"
     result = CampaignResult(options, started, progress.examples, progress.units, duration,
-                            findings, dict(getattr(mode, "INVARIANTS", {})), interrupted_at,
+                            findings, mode_invariants(mode, options), interrupted_at,
                             watch.noted[0] if watch.noted and interrupted_at else None)
     if interrupted_at is not None:
         raise CampaignInterrupted(result)
     return result
+
+
+def mode_invariants(mode: ModuleType, options: CampaignOptions) -> dict[str, str]:
+    """The invariants a campaign checks (its report's rows): the mode's, and the operator-control
+    ones with --operator-control."""
+    pick = getattr(mode, "invariants", None)
+    if pick is not None:
+        return dict(pick(options.handover))
+    return dict(getattr(mode, "INVARIANTS", {}))
 
 
 MINIMISE_REPLAYS = 400       # bound on the replays the step-removal pass may spend per finding
@@ -476,7 +491,8 @@ def save_tool_failure(failure: ToolFailure, options: CampaignOptions, directory:
     """The steps that made mavconform raise, as a case (`--replay` runs it again, under a
     debugger if need be), and the traceback beside it as NAME.txt."""
     case = Case(options.mode, options.target, failure.seed, failure.steps, None,
-                {"campaign_seed": options.seed, "tool_error": failure.error})
+                {"campaign_seed": options.seed, "tool_error": failure.error,
+                 **({"handover": True} if options.handover else {})})
     path = save_case(case, directory)
     named = path.with_name(path.name.replace(f"{options.mode}-case-", f"{options.mode}-tool-error-"))
     path.replace(named)

@@ -479,11 +479,75 @@ def raw_message(draw) -> dict[str, Any]:
             "from": draw(st.sampled_from(["a", "b", "mute"]))}
 
 
-def stray_step(max_items: int = 20, max_after: float = 4.0) -> st.SearchStrategy[dict[str, Any]]:
-    """Stray messages, sent between operations or `after` seconds into one (`during`)."""
+def stray_step(max_items: int = 20, max_after: float = 4.0, *,
+               handover: bool = False) -> st.SearchStrategy[dict[str, Any]]:
+    """Stray messages, sent between operations or `after` seconds into one (`during`); with
+    `handover`, operator-control requests and MISSION_START among them."""
+    message = st.one_of(raw_message(), control_raw_message()) if handover else raw_message()
     return st.fixed_dictionaries({
-        "op": st.just("stray"), "messages": st.lists(raw_message(), min_size=1, max_size=3),
+        "op": st.just("stray"), "messages": st.lists(message, min_size=1, max_size=3),
         "during": st.one_of(st.none(), operations(max_items)), "after": seconds(max_after)})
+
+
+# --- operator control (--operator-control) -----------------------------------------------------------
+
+REQUEST_OPERATOR_CONTROL = 32100   # MAV_CMD_REQUEST_OPERATOR_CONTROL (development.xml)
+CONTROL_ACTIONS = ("request", "release", "allow", "disallow")
+OWNER_ANSWERS = (None, "allow", "release", "refuse")
+FUZZ_GCS_IDS = (245.0, 246.0, 248.0)   # A, B, the mute GCS (fuzz/protocol/world.py)
+
+
+def control_step(max_timeout: float = 10.0, actions: tuple[str, ...] = CONTROL_ACTIONS
+                 ) -> st.SearchStrategy[dict[str, Any]]:
+    """GCS A or B asks for control (param 2: allow takeover; param 3: its timeout; with
+    `wait_for_owner` a refusal waits for the owner's answer), releases it, or, as the owner,
+    allows or disallows takeover. `answer` is what the owner answers a request the vehicle
+    forwards to it meanwhile."""
+    timeouts = [t for t in (3.0, 5.0, 10.0) if t <= max(3.0, max_timeout)]
+    return st.fixed_dictionaries({
+        "op": st.just("control"), "gcs": st.sampled_from(["a", "b"]),
+        "action": st.sampled_from(actions), "allow": st.booleans(),
+        "timeout": st.sampled_from(timeouts), "wait_for_owner": st.booleans(),
+        "answer": st.sampled_from(OWNER_ANSWERS)})
+
+
+def gcs_loss_step(max_silence: float = 12.0, max_wait: float = 20.0) -> st.SearchStrategy[dict[str, Any]]:
+    """GCS A or B sends no HEARTBEAT for `seconds` (then beats again); `wait` seconds pass.
+    Half the draws are 7 s, beyond the 5 s owner loss plus a status period, so a silent
+    owner's loss is met as often as a short gap it must survive (not where the bounds are
+    shorter: over UDP, where time is real)."""
+    lost = 7.0
+    if max_silence < lost or max_wait < lost:   # over UDP: short gaps only, no emphasis
+        return st.fixed_dictionaries({"op": st.just("gcs_loss"), "gcs": st.sampled_from(["a", "b"]),
+                                      "seconds": seconds(max_silence), "wait": seconds(max_wait)})
+    return st.fixed_dictionaries({
+        "op": st.just("gcs_loss"), "gcs": st.sampled_from(["a", "b"]),
+        "seconds": st.one_of(st.just(lost), seconds(max_silence)),
+        "wait": st.one_of(st.just(lost), seconds(max_wait))})
+
+
+def b_operation(max_items: int = 20) -> st.SearchStrategy[dict[str, Any]]:
+    """An operation of GCS B on its own (with operator control: maybe not the owner's)."""
+    return operations(max_items).map(lambda op: {**op, "gcs": "b"})
+
+
+@st.composite
+def control_raw_message(draw) -> dict[str, Any]:
+    """MAV_CMD_REQUEST_OPERATOR_CONTROL with any params (release, request, param 2 and 4 out of
+    range, param 3 at and beyond the XML's 3..60 s), or MAV_CMD_MISSION_START, as a stray."""
+    if draw(st.booleans()):
+        fields = {"command": REQUEST_OPERATOR_CONTROL, "confirmation": draw(st.sampled_from([0, 1, 255])),
+                  "param1": draw(st.one_of(st.sampled_from([1.0, 0.0]), edge_f32)),
+                  "param2": draw(st.one_of(st.sampled_from([0.0, 1.0]), edge_f32)),
+                  "param3": draw(st.one_of(st.sampled_from([10.0, 0.0, 3.0, 60.0]), edge_f32)),
+                  "param4": draw(st.one_of(st.sampled_from((0.0, *FUZZ_GCS_IDS)), edge_f32)),
+                  "param5": 0.0, "param6": 0.0, "param7": 0.0}
+    else:
+        fields = {"command": int(Cmd.MISSION_START), "confirmation": 0,
+                  "param1": draw(st.sampled_from([0.0, 1.0])), "param2": draw(st.sampled_from([0.0, 5.0])),
+                  "param3": 0.0, "param4": 0.0, "param5": 0.0, "param6": 0.0, "param7": 0.0}
+    return {"msg": "COMMAND_LONG", "fields": fields, "to": draw(st.sampled_from(TARGETS)),
+            "from": draw(st.sampled_from(["a", "b", "mute"]))}
 
 
 def faults_step(max_loss: float = 0.3, max_burst: float = 30.0) -> st.SearchStrategy[dict[str, Any]]:

@@ -30,6 +30,13 @@ Fuzz a mission implementation and save what breaks it.
             invariants after every step: atomic uploads, exactly one result per operation,
             both ends back to idle, retries within limits, download == last accepted upload,
             the vehicle still answers.
+            With --operator-control the vehicle is also an operator-control system manager
+            (MAV_CMD_REQUEST_OPERATOR_CONTROL, CONTROL_STATUS) and the GCSs request,
+            release and hand over control and fall silent for a while; the safety
+            properties are invariants too: never two owners, nothing a GCS not in control
+            sends takes effect, control changes only by a grant, a release or owner loss,
+            CONTROL_STATUS tells the truth, every request answered once in bounded time,
+            a silent owner is dropped.
   frames    byte-level mutations of valid mission frames and garbage (bad CRC, bad length,
             truncation, bad magic, unknown ids, v1/v2 mixing, incompat flags, wrong-key and
             stale signatures, bytes between frames); the target must keep sending HEARTBEAT,
@@ -65,6 +72,8 @@ examples:
   mavconform fuzz --target builtin:spec --mode protocol --examples 200 --seed 1
   mavconform fuzz --target builtin:spec --mode frames --time 60s
   mavconform fuzz --target mutant:non-atomic-upload --examples 100     # a planted bug: found
+  mavconform fuzz --operator-control --examples 300 --seed 1                   # operator control too
+  mavconform fuzz --operator-control --target mutant:screens-commands-only     # a non-owner's write: found
   mavconform fuzz --target udpin:14550 --mode frames --time 5m          # a SITL that sends to us
   mavconform fuzz --target udpin:14550 --time 5m --restart-cmd './restart-sitl.sh'
   mavconform fuzz --replay fuzz-findings/protocol-atomic-upload-1a2b3c4d5e.json
@@ -104,6 +113,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--restart-timeout", type=seconds_up_to(3600), default=RESTART_TIMEOUT, metavar="S",
                    help=f"longest a --restart-cmd may run, and then the wait for HEARTBEAT "
                         f"(default {RESTART_TIMEOUT:g})")
+    p.add_argument("--operator-control", dest="handover", action="store_true",
+                   help="protocol mode: fuzz operator control too (requests, releases, takeovers, GCS "
+                        "loss; never two owners, nothing from a non-owner executed, ...). builtin: and "
+                        "mutant: vehicles are built as their own system manager; a udp:/udpin: target "
+                        "must already send CONTROL_STATUS (else a usage error, exit 2)")
     p.add_argument("--replay", metavar="CASE.json",
                    help="run one saved case again (target and mode come from the case)")
     p.add_argument("--capture", metavar="FILE.mcap", help="with --replay: record the replay to this MCAP file")
@@ -125,16 +139,21 @@ def _campaign(args: argparse.Namespace) -> int:
     from mavconform.reports.write import write_reports
 
     parse_target(args.target)   # a bad address says so before any banner or folder appears
+    if args.handover and args.mode != "protocol":
+        raise UsageError("--operator-control applies to --mode protocol (operator control is fuzzed as GCS "
+                         f"operations, not as {args.mode})")
     for option, folder in (("--findings", args.findings), ("--report-dir", args.report_dir)):
         _writable(option, folder)   # before the search: a finding must never be lost to a bad path
     examples = args.examples if args.examples is not None or args.time is not None else DEFAULT_EXAMPLES
     options = CampaignOptions(target=args.target, mode=args.mode, seed=args.seed, examples=examples,
                               time_s=args.time, findings_dir=args.findings,
                               database=open_database(args.database), profile=args.profile,
-                              restart_cmd=args.restart_cmd, restart_timeout=args.restart_timeout)
+                              restart_cmd=args.restart_cmd, restart_timeout=args.restart_timeout,
+                              handover=args.handover)
     budget = " and ".join(x for x in (f"{examples} examples" if examples is not None else "",
                                       f"{args.time:g} s" if args.time is not None else "") if x)
-    print(f"mavconform fuzz: {args.mode} mode against {args.target}, seed {args.seed}, "
+    control = ", operator control on (--operator-control)" if args.handover else ""
+    print(f"mavconform fuzz: {args.mode} mode against {args.target}{control}, seed {args.seed}, "
           f"budget {budget}", flush=True)
     unit = "steps" if args.mode == "protocol" else "frames"
     bar = None if args.quiet else ProgressLine(unit, sys.stderr)
@@ -198,9 +217,10 @@ def _interrupted(where: str | None) -> int:
 
 
 def _replay(args: argparse.Namespace) -> int:
-    if args.examples is not None or args.time is not None or args.restart_cmd or args.profile:
+    if args.examples is not None or args.time is not None or args.restart_cmd or args.profile or args.handover:
         raise UsageError("--replay runs one saved case: --examples, --time, --profile and --restart-cmd "
-                         "do not apply (the case names its profile; restart the target yourself)")
+                         "do not apply, nor does --operator-control (the case names its profile and whether "
+                         "operator control was on; restart the target yourself)")
     case = load_case(args.replay)
     mode = load_mode(case.mode)
     print(f"mavconform fuzz: replaying {args.replay} ({case.mode} mode, {len(case.steps)} step(s), "

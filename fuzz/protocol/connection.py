@@ -48,6 +48,7 @@ class Watch:
         self.autopilot: int | None = None
         self.last_heartbeat: float | None = None   # driver clock time of the target's last one
         self.last_reply: float | None = None       # ... and of its last answer to a GCS (REPLIES)
+        self.last_status: tuple[float, Any] | None = None   # ... and its last CONTROL_STATUS
         self._next_beat: float | None = 0.0
 
     def datagram_received(self, data: bytes, source: Address, now: float) -> None:
@@ -55,6 +56,9 @@ class Watch:
             msg = frame.msg
             if msg._type in REPLIES and (frame.src_system, frame.src_component) == self.target:
                 self.last_reply = now
+                continue
+            if msg._type == "CONTROL_STATUS" and self.target is not None and frame.src_system == self.target[0]:
+                self.last_status = (now, msg)
                 continue
             if not is_vehicle_heartbeat(msg):
                 continue
@@ -125,6 +129,15 @@ class TargetConnection:
         """Seconds since the target's last HEARTBEAT (driver clock)."""
         last = self.watch.last_heartbeat
         return float("inf") if last is None else self.driver.clock.now() - last
+
+    def control_status_after(self, since: float, timeout: float) -> Any | None:
+        """The target's latest CONTROL_STATUS if it was received after `since` (driver clock),
+        waiting up to `timeout` for one; None if none came."""
+        watch = self.watch
+        self.driver.run_until(lambda: watch.last_status is not None and watch.last_status[0] > since,
+                              timeout=max(0.0, timeout))
+        last = watch.last_status
+        return last[1] if last is not None and last[0] > since else None
 
     def replies_quiet(self, since: float, quiet: float) -> bool:
         """No answer from the target for `quiet` s, counted from `since` at the earliest."""

@@ -11,6 +11,13 @@ out as MISSION_ITEM (float x/y) they replace the x/y the client converted from t
 ones, so out-of-range floats (1e10, NaN, +-inf, 215 deg) reach the vehicle inside a
 transfer. A MISSION_ITEM_INT of the same item keeps its int32 x/y: a float has no meaning
 there (its out-of-range ints are the wire item's own x/y).
+
+With operator control (`--operator-control`) the GCS also runs the reference `ControlClient`
+(`control`): requests, releases and the takeover flag go through it, so it is also the judge
+of "every control operation ends with exactly one result"; the owner's answer to a request
+the vehicle forwards is `answer` (allow, release, refuse, or None: no answer, the request
+times out). Such a GCS sends HEARTBEAT at 1 Hz (the vehicle's owner-loss rule counts them),
+except while `silence` keeps it quiet: a GCS lost for a while, then back.
 """
 
 from __future__ import annotations
@@ -20,6 +27,8 @@ import time
 from typing import Any, Callable, Sequence
 
 from mavconform.reference_impl.endpoint import MavlinkEndpoint
+from mavconform.reference_impl.handover.control_client import ControlClient
+from mavconform.reference_impl.handover.control_results import ControlOperation, ControlResult, Decision
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.actions import Finished, Peer, Send
 from mavconform.reference_impl.mission.client import MissionClient
@@ -29,6 +38,9 @@ from mavconform.reference_impl.mission.timing import Timings
 from mavconform.reference_impl.net.node import Address
 
 _ITEMS = ("MISSION_ITEM_INT", "MISSION_ITEM")
+# What a user asks of the control client (its answers to forwarded requests are its own).
+USER_CONTROL_OPS = frozenset({ControlOperation.REQUEST, ControlOperation.RELEASE,
+                              ControlOperation.ALLOW_TAKEOVER, ControlOperation.DISALLOW_TAKEOVER})
 # Rewrite keys that stand for MISSION_ITEM's float x/y (and mean nothing for MISSION_ITEM_INT).
 FLOAT_XY = {"fx": "x", "fy": "y"}
 
@@ -56,11 +68,19 @@ class FuzzGcs:
 
     def __init__(self, system: int, component: int, target: Peer | None, *,
                  timings: Timings | None = None, heartbeat: bool = False, mute: bool = False,
-                 wall_clock: Callable[[], float] = time.time) -> None:
+                 wall_clock: Callable[[], float] = time.time, control: bool = False) -> None:
         self.endpoint = MavlinkEndpoint(system, component, wall_clock=wall_clock)
         self.timings = timings or Timings()
         self.heartbeat = heartbeat
         self.mute = mute
+        self.with_control = control and not mute
+        self.control: ControlClient | None = None
+        self.control_results: list[ControlResult] = []   # the user's operations, in finishing order
+        self.control_answers: list[ControlResult] = []   # the client's own (answers, window closes)
+        self.control_log: list[ControlResult] = []       # both, in finishing order
+        self.answer: Decision | None = None              # the owner's answer to a forwarded request
+        self.silent_until = 0.0                          # no HEARTBEAT before this (GCS loss)
+        self.items_sent = 0                              # MISSION_ITEM(_INT)s sent since `listen()`
         self.results: list[OperationResult] = []
         self.heard: list[Any] = []          # messages from the target since `listen()`
         self.listening = False
@@ -79,6 +99,9 @@ class FuzzGcs:
     def set_target(self, target: Peer) -> None:
         self.target = target
         self.client = MissionClient(self.endpoint.system, self.endpoint.component, target, self.timings)
+        if self.with_control:
+            self.control = ControlClient(self.endpoint.system, self.endpoint.component, target,
+                                         policy=lambda request: self.answer)
 
     # --- operations -----------------------------------------------------------------------
     @property
@@ -107,6 +130,33 @@ class FuzzGcs:
     def cancel(self, now: float) -> None:
         self._run(self._client().cancel(now))
 
+    # --- operator control (with `control`) ---------------------------------------------------
+    @property
+    def control_busy(self) -> bool:
+        return self.control is not None and self.control.busy
+
+    def request_control(self, now: float, *, allow_takeover: bool, timeout: float, wait: bool) -> None:
+        self._run(self._control().request_control(now, allow_takeover=allow_takeover, timeout=timeout,
+                                                  wait=wait))
+
+    def release_control(self, now: float) -> None:
+        self._run(self._control().release_control(now))
+
+    def set_takeover(self, allowed: bool, now: float) -> bool:
+        """The owner sets its takeover flag; False (nothing sent) when this GCS does not
+        believe it is in control: its re-request would be a request for control."""
+        client = self._control()
+        if not client.in_control:
+            return False
+        self._run(client.set_takeover(allowed, now))
+        return True
+
+    def silence(self, now: float, seconds: float) -> None:
+        """Send no HEARTBEAT for `seconds` from now (a GCS lost, then back)."""
+        self.silent_until = max(self.silent_until, now + seconds)
+        if self._next_heartbeat is not None:
+            self._next_heartbeat = max(self._next_heartbeat, self.silent_until)
+
     def send_raw(self, msg: Any) -> None:
         """Send any message to the target's address, exactly as given."""
         self.endpoint.send(msg, self.target)
@@ -114,6 +164,7 @@ class FuzzGcs:
     def listen(self) -> None:
         """Start collecting what the target says (for probes and download bounds)."""
         self.heard, self.counts, self.listening = [], {}, True
+        self.items_sent = 0
 
     # --- DatagramNode ---------------------------------------------------------------------
     def datagram_received(self, data: bytes, source: Address, now: float) -> None:
@@ -132,20 +183,26 @@ class FuzzGcs:
                     self.counts[msg.mission_type] = msg.count
             if not self.mute:
                 self._run(self.client.handle(frame, now))
+                if self.control is not None:
+                    self._run(self.control.handle(frame, now))
 
     def poll(self, now: float) -> None:
         if self.client is not None:
             self._run(self.client.poll(now))
+        if self.control is not None:
+            self._run(self.control.poll(now))
         if self._next_heartbeat is not None and now >= self._next_heartbeat:
-            self._next_heartbeat = now + m.HEARTBEAT_PERIOD
-            self.endpoint.send(m.gcs_heartbeat_message())
+            self._next_heartbeat = max(now + m.HEARTBEAT_PERIOD, self.silent_until)
+            if now >= self.silent_until:
+                self.endpoint.send(m.gcs_heartbeat_message())
 
     def next_deadline(self) -> float | None:
-        d = self.client.next_deadline() if self.client is not None else None
-        hb = self._next_heartbeat
-        if d is None:
-            return hb
-        return d if hb is None or d < hb else hb
+        best = self._next_heartbeat
+        for d in (self.client.next_deadline() if self.client is not None else None,
+                  self.control.next_deadline() if self.control is not None else None):
+            if d is not None and (best is None or d < best):
+                best = d
+        return best
 
     def take_outgoing(self) -> list[tuple[bytes, Address]]:
         return self.endpoint.take_outgoing()
@@ -156,13 +213,26 @@ class FuzzGcs:
             raise RuntimeError("FuzzGcs has no target yet")
         return self.client
 
+    def _control(self) -> ControlClient:
+        if self.control is None:
+            raise RuntimeError(f"FuzzGcs {self.system} has no operator-control client")
+        return self.control
+
     def _run(self, actions: list[Any]) -> None:
         send = self.endpoint.send
         for action in actions:
             if isinstance(action, Send):
                 msg = action.msg
-                if self._rewrite and msg._type in _ITEMS and msg.seq in self._rewrite:
-                    msg = outgoing(msg, self._rewrite[msg.seq])
+                if msg._type in _ITEMS:
+                    self.items_sent += 1
+                    if self._rewrite and msg.seq in self._rewrite:
+                        msg = outgoing(msg, self._rewrite[msg.seq])
                 send(msg, action.to)
             elif isinstance(action, Finished):
-                self.results.append(action.result)
+                result = action.result
+                if isinstance(result, ControlResult):
+                    self.control_log.append(result)
+                    (self.control_results if result.operation in USER_CONTROL_OPS
+                     else self.control_answers).append(result)
+                else:
+                    self.results.append(result)

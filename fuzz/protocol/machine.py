@@ -2,7 +2,8 @@
 
 Rules are what a GCS (or a link) does: upload, download, clear, set the current item,
 cancel mid-way, let a second GCS start a transfer, send stray messages, change the link's
-faults, wait. Each rule draws one step dict and hands it to the `Runner`, which records
+faults, wait; with `Knobs.handover` also request, release and hand over operator control,
+fall silent for a while, let GCS B operate alone, send stray control commands. Each rule draws one step dict and hands it to the `Runner`, which records
 nothing Hypothesis does not also know: the machine keeps the list of steps it ran, so a
 failure carries the exact program that `replay` re-runs. Invariants are checked after
 every rule (and by `replay` after every step) through the same `Runner.check`.
@@ -47,6 +48,7 @@ class Knobs:
     max_wait: float = 20.0       # longest wait step, in protocol seconds (mid-operation cues: 4 s)
     profile: str | None = None   # UDP targets: the vehicle profile whose rules the oracles use
     max_burst: float = 30.0      # longest total link outage a faults step draws, in seconds
+    handover: bool = False       # operator control: control steps, GCS loss, the control invariants
 
 
 class Finding(AssertionError):
@@ -128,7 +130,7 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
             if not _spent():   # past the budget the example is empty: no world to open
                 self._guarded(lambda: setattr(self, "runner", Runner(
                     knobs.target, seed, atomic=knobs.atomic, connection=shared.connection,
-                    profile=knobs.profile, latency=LINK_LATENCY)))
+                    profile=knobs.profile, latency=LINK_LATENCY, handover=knobs.handover)))
 
         def _do(self, step: dict[str, Any]) -> None:
             if _spent() or self.runner is None:
@@ -204,6 +206,27 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
         if knobs.faults:
             @rule(step=fs.faults_step(max_burst=knobs.max_burst))
             def link_faults(self, step: dict[str, Any]) -> None:
+                self._do(step)
+
+        if knobs.handover:
+            @rule(step=fs.control_step(max_timeout=knobs.max_wait, actions=("request",)))
+            def request_control(self, step: dict[str, Any]) -> None:
+                self._do(step)
+
+            @rule(step=fs.control_step(max_timeout=knobs.max_wait, actions=("release", "allow", "disallow")))
+            def release_or_hand_over_control(self, step: dict[str, Any]) -> None:
+                self._do(step)
+
+            @rule(step=fs.gcs_loss_step(min(12.0, knobs.max_burst), knobs.max_wait))
+            def a_gcs_falls_silent(self, step: dict[str, Any]) -> None:
+                self._do(step)
+
+            @rule(step=fs.b_operation(n))
+            def second_gcs_operates_alone(self, step: dict[str, Any]) -> None:
+                self._do(step)
+
+            @rule(step=fs.stray_step(n, after, handover=True))
+            def stray_control_commands(self, step: dict[str, Any]) -> None:
                 self._do(step)
 
         @invariant()

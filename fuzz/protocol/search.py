@@ -15,6 +15,12 @@ campaign, and findings reach the search through the `CampaignState`, not as exce
 (machine.py says why). A target that never says HEARTBEAT raises `TargetUnresponsive`; an
 exception of our own raises `ToolError` with the steps that led to it.
 
+Operator control (`Knobs.handover`, `--operator-control`): the case records it (`found_by.handover:
+true`) so `replay` builds the same world; a case without the key replays as before, and a
+control step in one is a usage error. Over UDP the target must send CONTROL_STATUS within
+CONTROL_STATUS_WAIT, else `UsageError` (exit 2): a vehicle with no system manager has no
+operator control to fuzz.
+
 Interrupts: Ctrl-C (or SIGTERM, made one by the CLI) raises `SearchInterrupted` with the
 findings seen so far: Hypothesis lets a KeyboardInterrupt through at once, even while it
 shrinks, so every failing example is noted as it happens and the smallest per invariant
@@ -48,7 +54,10 @@ FIRST_CHUNK_UDP = 1         # ... over UDP, where one example can take half a mi
 MAX_CHUNK = 500
 _OPS = {"upload": ("type", "items"), "download": ("type",), "clear": ("type",),
         "set_current": ("seq",), "cancel": ("of", "after"), "second_gcs": ("first", "second", "after"),
-        "stray": ("messages", "after"), "faults": (), "wait": ("seconds",)}
+        "stray": ("messages", "after"), "faults": (), "wait": ("seconds",),
+        "control": ("gcs", "action"), "gcs_loss": ("gcs", "seconds")}
+_HANDOVER_OPS = ("control", "gcs_loss")
+CONTROL_STATUS_WAIT = 3.0   # s a UDP target has to send CONTROL_STATUS under --operator-control (as `run`'s HO clauses)
 
 
 UDP_MAX_WAIT = 2.0          # s: the longest wait step over real sockets (in-process: 20 s of virtual time)
@@ -69,17 +78,21 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
            stop_after: float | None = None, database: ExampleDatabase | None = None,
            on_example: Callable[[int], None] | None = None,
            knobs: Knobs | None = None, profile: str | None = None,
-           capture: CaptureHook | None = None) -> list[Case]:
+           capture: CaptureHook | None = None, handover: bool | None = None) -> list[Case]:
     """Run the protocol state machine against `target`; return the shrunk findings.
     `profile` (UDP targets) names the vehicle profile whose rules the oracles apply;
-    `capture` sees the live traffic of a UDP campaign (the campaign keeps the last of it)."""
+    `capture` sees the live traffic of a UDP campaign (the campaign keeps the last of it);
+    `handover` (else the knobs') turns operator control on: the control steps and invariants.
+    A UDP target that sends no CONTROL_STATUS has no operator control to fuzz: `UsageError`."""
+    from dataclasses import replace
     if knobs is None:
         knobs = Knobs(target=target) if parse_target(target).in_process else udp_knobs(target)
     else:
         knobs = _with_target(knobs, target)
     if profile is not None:
-        from dataclasses import replace
         knobs = replace(knobs, profile=profile)
+    if handover is not None:
+        knobs = replace(knobs, handover=handover)
     if max_examples is None and stop_after is None:
         max_examples = DEFAULT_EXAMPLES
     deadline = None if stop_after is None else time.monotonic() + stop_after
@@ -88,6 +101,8 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
     if not uri.in_process:   # TargetUnresponsive if it never says HEARTBEAT
         state.connection = TargetConnection(uri, seed=seed, capture=capture)
     try:
+        if knobs.handover and state.connection is not None:
+            _require_control_status(state.connection)
         return _search(knobs, seed, max_examples, deadline, database, on_example, state)
     finally:
         if state.connection is not None:
@@ -139,14 +154,22 @@ def _search(knobs: Knobs, seed: int, max_examples: int | None, deadline: float |
 
 def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | None:
     """Re-run the case's steps (in virtual time for in-process targets); the first broken
-    invariant, or None."""
+    invariant, or None. `found_by.handover` rebuilds the world with operator control (a case
+    saved before the knob existed has none, and replays as it was found)."""
+    handover = case_handover(case.found_by)
     for i, step in enumerate(case.steps):
-        _check_step(step, f"step {i}")
+        _check_step(step, f"step {i}", handover)
     profile = case.found_by.get("profile")
     if profile is not None and not isinstance(profile, str):
         raise UsageError(f"found_by.profile: expected a profile name or file, got {profile!r:.40}")
     runner = Runner(case.target, case.seed, capture=capture, atomic=case.found_by.get("atomic"),
-                    profile=profile, latency=case_latency(case.found_by))
+                    profile=profile, latency=case_latency(case.found_by), handover=handover)
+    if handover and runner.world.connection is not None:
+        try:
+            _require_control_status(runner.world.connection)
+        except BaseException:
+            runner.close()
+            raise
     mark = getattr(capture, "mark", None)   # a capture that labels where each step starts
     try:
         for i, step in enumerate(case.steps):
@@ -160,7 +183,25 @@ def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | Non
         runner.close()
 
 
+def case_handover(found_by: dict[str, Any]) -> bool:
+    """Whether a case was found with operator control on (`found_by.handover`; absent: off)."""
+    value = found_by.get("handover", False)
+    if not isinstance(value, bool):
+        raise UsageError(f"found_by.handover: expected true or false, got {value!r:.40}")
+    return value
+
+
 # --- internals -------------------------------------------------------------------------------
+
+def _require_control_status(connection: TargetConnection) -> None:
+    """--operator-control over UDP: the target must be an operator-control system manager, which
+    streams CONTROL_STATUS; one that sends none has nothing to fuzz (a usage mistake, exit 2)."""
+    since = connection.driver.clock.now() - CONTROL_STATUS_WAIT
+    if connection.control_status_after(since, CONTROL_STATUS_WAIT) is None:
+        raise UsageError(f"--operator-control: {connection.uri} sent no CONTROL_STATUS in {CONTROL_STATUS_WAIT:g} s: "
+                         "it is no operator-control system manager (MAV_CMD_REQUEST_OPERATOR_CONTROL); "
+                         "fuzz it without --operator-control")
+
 
 def _chunk_size(rate: float, time_left: float, left: int | None, first: int = FIRST_CHUNK) -> int:
     """Half the remaining budget's worth of examples at the last rate (a small first chunk)."""
@@ -182,9 +223,11 @@ def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: Example
         phases=(Phase.explicit, Phase.reuse, Phase.generate)
         + ((Phase.shrink,) if parse_target(knobs.target).in_process else ()),
         report_multiple_bugs=True, print_blob=False))
-    # Database key: the machine and the knobs (seed left out, so shards share findings).
+    # Database key: the machine and the knobs (seed left out, so shards share findings). A
+    # campaign without --operator-control keeps the key it had before that knob existed.
+    key = repr(knobs) if knobs.handover else repr(knobs).replace(", handover=False", "")
     test.hypothesis.inner_test._hypothesis_internal_add_digest = hashlib.sha256(
-        repr(("mavconform-protocol-fuzz/1", knobs)).encode()).digest()
+        repr(("mavconform-protocol-fuzz/1", key)).encode()).digest()
     test._hypothesis_internal_use_seed = stable_seed("protocol", seed, chunk)
     try:
         test()
@@ -241,6 +284,8 @@ def _case(found: Finding, knobs: Knobs, seed: int, chunk: int, examples: int) ->
         found_by["atomic"] = knobs.atomic
     if knobs.profile is not None:
         found_by["profile"] = knobs.profile
+    if knobs.handover:
+        found_by["handover"] = True
     if parse_target(knobs.target).in_process:
         found_by["latency"] = LINK_LATENCY
     return Case(MODE, knobs.target, found.seed, tuple(found.steps), found.violation, found_by)
@@ -251,17 +296,23 @@ def _with_target(knobs: Knobs, target: str) -> Knobs:
     return replace(knobs, target=target)
 
 
-def _check_step(step: Any, where: str) -> None:
+def _check_step(step: Any, where: str, handover: bool = False) -> None:
     """A saved case is a file a user may have edited: a bad step is a usage error."""
     if not isinstance(step, dict) or step.get("op") not in _OPS:
         raise UsageError(f"{where}: expected an object with op one of {', '.join(_OPS)}, got {step!r:.80}")
     missing = [k for k in _OPS[step["op"]] if k not in step]
     if missing:
         raise UsageError(f"{where}: {step['op']} step lacks {', '.join(missing)}")
+    if step["op"] in _HANDOVER_OPS and not handover:
+        raise UsageError(f"{where}: a {step['op']} step needs operator control (found_by.handover: true)")
+    if step["op"] in _HANDOVER_OPS and step.get("gcs") not in ("a", "b"):
+        raise UsageError(f"{where}: gcs must be \"a\" or \"b\", got {step.get('gcs')!r:.40}")
+    if step["op"] == "control" and step.get("action") not in ("request", "release", "allow", "disallow"):
+        raise UsageError(f"{where}: action must be request, release, allow or disallow, got {step.get('action')!r:.40}")
     for key in ("of", "first", "second", "during"):
         if step.get(key) is not None:
-            _check_step(step[key], f"{where}.{key}")
-    for key in ("after", "seconds"):
+            _check_step(step[key], f"{where}.{key}", handover)
+    for key in ("after", "seconds", "wait", "timeout"):
         if key in step:
             value = step[key]
             if (not isinstance(value, (int, float)) or isinstance(value, bool)

@@ -13,6 +13,20 @@ search ran. The vocabulary (drawn by `fuzz.strategies`):
   {"op": "faults", "up": SCHEDULE|null, "down": SCHEDULE|null}   on A's link, from now on
   {"op": "wait", "seconds": S}
 
+With operator control (`--operator-control`; `fuzz.protocol.control`), also:
+
+  {"op": "control", "gcs": "a"|"b", "action": "request"|"release"|"allow"|"disallow",
+   "allow": bool, "timeout": S, "wait_for_owner": bool, "answer": "allow"|"release"|"refuse"|null}
+      through the GCS's control client, to its result: a request (param 2 `allow`, param 3
+      `timeout`; with `wait_for_owner`, a refusal waits for the owner's answer), a release, or the
+      owner's takeover flag set or cleared (a GCS that does not believe it owns control sends
+      nothing). `answer` is what the owner, A or B, answers a request forwarded to it, from
+      this step on.
+  {"op": "gcs_loss", "gcs": "a"|"b", "seconds": S, "wait": W}   the GCS sends no HEARTBEAT
+      for S s from now (then beats again); the step lets W s pass
+  an operation with "gcs": "b" is GCS B's (mission writes now meet the control filter), and
+  strays may carry MAV_CMD_REQUEST_OPERATOR_CONTROL and MAV_CMD_MISSION_START
+
 WIRE_ITEM is a dict of MISSION_ITEM_INT fields (a "seq"/"mission_type" key overrides what
 goes out; "fx"/"fy" are floats sent in MISSION_ITEM.x/y instead of the int x/y converted);
 RAW is {"msg": NAME, "fields": {...}, "to": "target"|"broadcast"|"other-system"|
@@ -37,13 +51,16 @@ from mavconform.reference_impl.mission.results import OperationResult
 from mavconform.reference_impl.mission.transitions import SlotState
 from mavconform.reference_impl.net.sim import CaptureHook
 from mavconform.reference_impl.wire.dialect import mavlink as _d
+from mavconform.reference_impl.handover import control_messages as cm
+from mavconform.reference_impl.handover.control_results import ControlResult, Decision
 
 from ..case import Violation
+from .control import CONTROL_INVARIANTS, WIRE_STATUS_GRACE, WIRE_STATUS_WAIT, operation_bound
 from .faults import build_fault_model
 from .gcs import FuzzGcs
 from .connection import TargetConnection
 from .versions import Plan, Versions, Write, describe_plan
-from .world import World
+from .world import SYSTEM_A, SYSTEM_B, World, describe_system
 
 INVARIANTS: dict[str, str] = {
     "atomic-upload": "The vehicle's stored plan of each type is always one whole version it "
@@ -60,6 +77,14 @@ INVARIANTS: dict[str, str] = {
     "target-crash": "The vehicle never dies: an in-process vehicle never raises; a remote one keeps "
                     "sending HEARTBEAT and answering.",
 }
+DECISIONS = {"allow": Decision.ALLOW, "release": Decision.RELEASE, "refuse": Decision.REFUSE}
+
+
+def invariants(handover: bool = False) -> dict[str, str]:
+    """The invariants a campaign checks: the mission ones, and with `handover` the control ones."""
+    return {**INVARIANTS, **CONTROL_INVARIANTS} if handover else dict(INVARIANTS)
+
+
 HEARTBEAT_SILENCE = 3.0   # s without a HEARTBEAT (a 1 Hz stream) that make a silent target a crashed one
 
 MAX_ROUNDS = 10_000   # bound on the wait loop of one step (each round advances time or ends)
@@ -87,12 +112,29 @@ class _Run:
 
 
 @dataclass
+class _ControlRun:
+    """One operator-control operation of a GCS's control client, waited for like `_Run`."""
+
+    gcs: FuzzGcs
+    name: str
+    op: dict[str, Any]
+    done: int                     # len(gcs.control_results) when it started
+    started: float
+    bound: float                  # `control.operation_bound`
+
+    @property
+    def finished(self) -> bool:
+        return len(self.gcs.control_results) > self.done
+
+
+@dataclass
 class _Group:
     """What one step did that the oracle must hear about."""
 
     runs: list[_Run] = field(default_factory=list)
     writes: list[Write] = field(default_factory=list)
     strays: bool = False   # raw messages went out: their replies may still be on the way
+    controls: list[_ControlRun] = field(default_factory=list)
 
 
 class Runner:
@@ -100,10 +142,17 @@ class Runner:
 
     def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
                  atomic: bool | None = None, connection: TargetConnection | None = None,
-                 profile: str | None = None, latency: float = 0.0) -> None:
+                 profile: str | None = None, latency: float = 0.0, handover: bool = False) -> None:
         self.world = w = World(target, seed, capture=capture, atomic=atomic, connection=connection,
-                               profile=profile, latency=latency)
+                               profile=profile, latency=latency, handover=handover)
         self.index = -1
+        self.step_started = 0.0
+        self._folded = {"a": 0, "b": 0}   # control results folded into the wire judge, per GCS
+        self._faulty = False                # UDP: A's link had faults since the last fold
+        if w.wire is not None:              # who holds control as the example starts
+            first = w.connection.control_status_after(w.now() - WIRE_STATUS_WAIT, WIRE_STATUS_WAIT)
+            if first is not None:
+                w.wire.observed(first.gcs_main)
         initial = {t: w.stored(t) for t in PLAN_TYPES}   # None over the wire: unknown
         self.versions = Versions(initial, atomic=w.profile.atomic, form=w.profile.form)
         t = w.profile.timings
@@ -118,16 +167,18 @@ class Runner:
     def apply(self, step: dict[str, Any]) -> Violation | None:
         """Run one step; a violation seen while it ran (results, idleness) is returned."""
         self.index += 1
+        self.step_started = self.world.now()
         kind = step.get("op")
         handler: Callable[[dict[str, Any]], _Group | Violation | None] = {
             "upload": self._operation, "download": self._operation, "clear": self._operation,
             "set_current": self._operation, "cancel": self._cancel, "second_gcs": self._second_gcs,
             "stray": self._stray, "faults": self._faults, "wait": self._wait,
+            "control": self._control, "gcs_loss": self._gcs_loss,
         }[kind]
         group = handler(step)
         if group is None or isinstance(group, Violation):
-            return group
-        return self._conclude(group)
+            return self._control_broken() or group
+        return self._control_broken() or self._conclude(group) or self._control_broken()
 
     def check(self) -> Violation | None:
         """The invariants that hold between steps."""
@@ -136,6 +187,11 @@ class Runner:
         crashed = w.crashes()
         if crashed:
             return self._violation("target-crash", f"the vehicle raised and fell silent: {crashed[0]}")
+        if w.watch is not None:
+            w.watch.tick(w.now())
+            v = self._control_broken()
+            if v is not None:
+                return v
         if w.vehicle is not None:
             for t in PLAN_TYPES:
                 stored = w.stored(t)
@@ -154,6 +210,8 @@ class Runner:
 
     # --- steps ----------------------------------------------------------------------------
     def _operation(self, step: dict[str, Any]) -> _Group:
+        if step.get("gcs") == "b":
+            return _Group(runs=[self._start(self.world.b, "B", step)])
         return _Group(runs=[self._start(self.world.a, "A", step)])
 
     def _cancel(self, step: dict[str, Any]) -> _Group:
@@ -180,6 +238,10 @@ class Runner:
             gcs = self.world.gcss[raw.get("from", "a")]
             msg = self._raw_message(raw)
             gcs.send_raw(msg)
+            if self.world.wire is not None and cm.is_request_control(msg):
+                # whatever it asked, it may have moved control (to its sender, or to nobody)
+                self.world.wire.widen([gcs.system, 0], f"a stray operator-control command from "
+                                      f"{self._name(gcs.system)}")
             write = self._raw_write(raw)
             if write is not None:
                 group.writes.append(write)
@@ -187,13 +249,139 @@ class Runner:
 
     def _faults(self, step: dict[str, Any]) -> None:
         now = self.world.now()
-        self.world.set_faults(build_fault_model(step.get("up"), now),
-                              build_fault_model(step.get("down"), now))
+        up, down = build_fault_model(step.get("up"), now), build_fault_model(step.get("down"), now)
+        self.world.set_faults(up, down)
+        self._faulty = self._faulty or not (up.is_clean and down.is_clean)
         return None
 
     def _wait(self, step: dict[str, Any]) -> _Group:
         self.world.run_for(float(step["seconds"]))
         return _Group()
+
+    # --- operator control (--operator-control) ------------------------------------------------------
+    def _control(self, step: dict[str, Any]) -> _Group:
+        """A request, release or takeover-flag change through the GCS's control client, waited
+        for to its result; `answer` is the owners' policy for forwarded requests from now on."""
+        w = self.world
+        gcs, name = self._control_gcs(step)
+        answer = DECISIONS.get(step.get("answer") or "")
+        for g in (w.a, w.b):
+            g.answer = answer
+        now = w.now()
+        action = step["action"]
+        timeout = min(max(float(step.get("timeout", cm.DEFAULT_REQUEST_TIMEOUT)), cm.TIMEOUT_MIN), cm.TIMEOUT_MAX)
+        wait = bool(step.get("wait_for_owner")) and action == "request"
+        if gcs.control_busy:
+            return _Group()   # still busy with an earlier one (it had no result in its bound)
+        run = _ControlRun(gcs, name, step, len(gcs.control_results), now, operation_bound(timeout, wait))
+        if action == "request":
+            gcs.request_control(now, allow_takeover=bool(step.get("allow")), timeout=timeout, wait=wait)
+        elif action == "release":
+            gcs.release_control(now)
+        elif action in ("allow", "disallow"):
+            if not gcs.set_takeover(action == "allow", now):
+                return _Group()   # not in control, as far as it knows: nothing to set
+        else:
+            raise ValueError(f"not a control action: {action!r}")
+        return _Group(controls=[run])
+
+    def _gcs_loss(self, step: dict[str, Any]) -> _Group:
+        """The GCS sends no HEARTBEAT for `seconds`, then beats again; `wait` s pass now."""
+        w = self.world
+        gcs, _ = self._control_gcs(step)
+        gcs.silence(w.now(), float(step["seconds"]))
+        w.run_for(float(step.get("wait", 0.0)))
+        return _Group()
+
+    def _control_gcs(self, step: dict[str, Any]) -> tuple[FuzzGcs, str]:
+        w = self.world
+        if not w.handover:
+            raise ValueError(f"a {step['op']} step needs operator control (--operator-control)")
+        return (w.b, "B") if step.get("gcs") == "b" else (w.a, "A")
+
+    def _fold_control(self, until: float | None = None) -> None:
+        """UDP: fold our GCSs' control results (those finished by `until`) into the wire judge
+        in finishing order, then widen it wherever the target may have dropped an owner: a GCS
+        that was silent, faults on the link its HEARTBEATs cross, an owner that never beats
+        (the loss timeout of a remote target is unknown). Idempotent."""
+        w = self.world
+        wire = w.wire
+        if wire is None:
+            return
+        new: list[tuple[float, int, ControlResult]] = []
+        for key, gcs in (("a", w.a), ("b", w.b)):
+            log = gcs.control_log
+            done = self._folded[key]
+            while done < len(log) and (until is None or log[done].finished <= until):
+                new.append((log[done].finished, gcs.system, log[done]))
+                done += 1
+            self._folded[key] = done
+        for _, sysid, result in sorted(new, key=lambda n: (n[0], n[1])):
+            wire.result(sysid, result, result.finished)
+        silent = [g for g in (w.a, w.b) if g.silent_until > self.step_started]
+        clean = w.link_clean()
+        if silent:
+            wire.widen([0], f"{', '.join(self._name(g.system) for g in silent)} falling silent")
+        elif self._faulty or not clean:
+            wire.widen([0], "the link faults (an owner's HEARTBEATs may not have got through)")
+        elif wire.possible and wire.possible - {0, SYSTEM_A, SYSTEM_B}:
+            wire.widen([0], "an owner that sends no HEARTBEAT")
+        self._faulty = not clean
+
+    def _wire_writes(self, group: _Group) -> Violation | None:
+        """UDP: a mission write the vehicle ACCEPTED while, by the answers so far, only another
+        GCS can have been in control was executed for a non-owner. Judged in the order the
+        results came; a write whose result came within WIRE_STATUS_GRACE of a control answer is
+        not judged (the two may have crossed on the link)."""
+        w = self.world
+        wire = w.wire
+        answers = [r.finished for g in (w.a, w.b) for r in g.control_log]
+        for run in sorted(group.runs, key=lambda r: r.gcs.results[r.done].finished):
+            result = run.gcs.results[run.done]
+            self._fold_control(until=result.finished)
+            if (not result.ok or run.untrusted or run.op["op"] not in ("upload", "clear")
+                    or any(abs(t - result.finished) < WIRE_STATUS_GRACE for t in answers)
+                    or wire.may_write(run.gcs.system)):
+                continue
+            could = " or ".join(sorted(self._name(s) for s in wire.possible or ()))
+            return self._violation("non-owner-executed", (
+                f"the vehicle ACCEPTED {describe_op(run.op)} by GCS {run.name}, which is not in control "
+                f"(after {wire.because} only {could} can be)"))
+        self._fold_control()
+        return None
+
+    def _name(self, sysid: int) -> str:
+        return describe_system(sysid) if sysid else "nobody"
+
+    def _wire_status(self) -> Violation | None:
+        """UDP: the target's latest CONTROL_STATUS, held against the wire judge. It must be
+        fresh (at most WIRE_STATUS_WAIT old: the stream is nominally 1 Hz) and sent after the
+        step's last answer had time to show in it; if it is not, the probe waits (bounded, on
+        a clean link) for one that is."""
+        w = self.world
+        wire = w.wire
+        self._fold_control()
+        now = w.now()
+        since = max(now - WIRE_STATUS_WAIT, wire.answered_at + WIRE_STATUS_GRACE)
+        wait = max(0.0, since - now) + WIRE_STATUS_WAIT
+        status = w.connection.control_status_after(since, wait)
+        if status is None:
+            return self._violation("control-status-lies", (
+                f"no CONTROL_STATUS from the target for {WIRE_STATUS_WAIT + wait:.1f} s, the last "
+                f"{wait:.1f} s on a clean link (it should come at about 1 Hz)"))
+        broken = wire.judge(status.gcs_main, status.gcs_secondary)
+        return None if broken is None else self._violation(*broken)
+
+    def _control_broken(self) -> Violation | None:
+        """What the in-process control judge saw (first violation), or our own bug in it."""
+        w = self.world
+        error = w.control_error()
+        if error is not None:
+            raise error
+        broken = w.watch.first if w.watch is not None else None
+        if broken is None:
+            return None
+        return self._violation(broken.invariant, f"{broken.detail} (at t={broken.at:.2f} s)")
 
     # --- running operations ---------------------------------------------------------------
     def _start(self, gcs: FuzzGcs, name: str, op: dict[str, Any]) -> _Run:
@@ -217,8 +405,10 @@ class Runner:
             raise ValueError(f"not an operation: {op!r}")
         return run
 
-    def _bound(self, run: _Run) -> float:
+    def _bound(self, run: _Run | _ControlRun) -> float:
         """How long an operation may take: every message of it retried to the limit."""
+        if isinstance(run, _ControlRun):
+            return run.bound
         t = run.gcs.timings
         op = run.op
         if op["op"] == "upload":
@@ -229,7 +419,7 @@ class Runner:
             n = 0
         return t.default_timeout * (t.max_retries + 2) * max(n + 2, 2)
 
-    def _wait_for_results(self, runs: list[_Run]) -> Violation | None:
+    def _wait_for_results(self, runs: list[_Run | _ControlRun]) -> Violation | None:
         w = self.world
         for _ in range(MAX_ROUNDS):
             pending = [r for r in runs if not r.finished]
@@ -242,6 +432,11 @@ class Runner:
                 crashed = w.crashes()
                 if crashed:
                     return self._violation("target-crash", f"the vehicle raised and fell silent: {crashed[0]}")
+                if isinstance(late, _ControlRun):
+                    return self._violation("handover-unbounded", (
+                        f"{describe_op(late.op)} by GCS {late.name} had no result {limit - late.started:g} s "
+                        f"after it started (the control client's bound: its retries, and the request's "
+                        f"timeout when it waits for the owner)"))
                 return self._violation("one-result", (
                     f"{describe_op(late.op)} by GCS {late.name} had no result {limit - late.started:g} s "
                     f"after it started (the bound from the protocol's timeouts and retry limit)"))
@@ -249,9 +444,19 @@ class Runner:
         return self._violation("one-result", "the operations of this step did not settle (wait loop bound)")
 
     def _conclude(self, group: _Group) -> Violation | None:
-        v = self._wait_for_results(group.runs)
+        v = self._wait_for_results([*group.runs, *group.controls])
         if v is not None:
             return v
+        for control in group.controls:
+            extra = len(control.gcs.control_results) - control.done
+            if extra != 1:
+                return self._violation("handover-unbounded", (
+                    f"{describe_op(control.op)} by GCS {control.name} ended with {extra} results"))
+        wire = self.world.wire
+        if wire is not None:
+            v = self._wire_writes(group)
+            if v is not None:
+                return v
         writes = list(group.writes)
         reads: list[tuple[MissionType, Plan]] = []
         for run in group.runs:
@@ -309,6 +514,10 @@ class Runner:
         assert result is not None
         confirmed = result.ok and not run.untrusted
         maybe = not confirmed and (result.outcome_unknown or run.untrusted)
+        # refused before a single item went out (a DENIED from the control filter to a GCS not
+        # in control, or from a vehicle busy with another GCS): nothing of it was applied,
+        # even on a vehicle whose uploads are not atomic
+        untouched = (not confirmed and not maybe and result.nack is not None and run.gcs.items_sent == 0)
         if op["op"] == "upload":
             plans = run.plans
             asked_float = any(msg._type == m.REQUEST_FLOAT for msg in run.gcs.heard)
@@ -320,10 +529,10 @@ class Runner:
                     variant = float_variant(plans[0], rewrite, truncate=truncate)
                     if variant is not None and variant not in plans:
                         plans = plans + (variant,)
-            return [Write((MissionType(op["type"]),), plans, confirmed, maybe)]
+            return [Write((MissionType(op["type"]),), plans, confirmed, maybe, untouched)]
         if op["op"] == "clear":
             types = PLAN_TYPES if op["type"] == MissionType.ALL else (MissionType(op["type"]),)
-            return [Write(types, ((),), confirmed, maybe)]
+            return [Write(types, ((),), confirmed, maybe, untouched)]
         return []
 
     def _settle(self, group: _Group) -> Violation | None:
@@ -394,7 +603,8 @@ class Runner:
             for _ in range(t.max_retries + 1):
                 if self._ask_list(MissionType.MISSION):
                     return self._counted(MissionType.MISSION) or (
-                        None if w.virtual else self._other_counts())
+                        None if w.virtual else self._other_counts()) or (
+                        None if w.wire is None else self._wire_status())
                 age = w.heartbeat_age()
                 if age is not None and age > HEARTBEAT_SILENCE:
                     break          # silent altogether: no use asking again
@@ -525,6 +735,16 @@ def describe_op(op: dict[str, Any]) -> str:
     if kind == "set_current":
         how = "MAV_CMD_DO_SET_MISSION_CURRENT" if op.get("command") else "MISSION_SET_CURRENT"
         return f"a set-current to {op.get('seq')} ({how})"
+    if kind == "control":
+        action = op.get("action")
+        if action == "request":
+            return (f"a request for control (takeover {'allowed' if op.get('allow') else 'disallowed'}, "
+                    f"timeout {op.get('timeout', cm.DEFAULT_REQUEST_TIMEOUT):g} s"
+                    + (", waiting for the owner)" if op.get("wait_for_owner") else ")"))
+        return {"release": "a release of control", "allow": "allowing takeover",
+                "disallow": "disallowing takeover"}.get(action, f"control {action}")
+    if kind == "gcs_loss":
+        return f"{op.get('seconds')} s without HEARTBEAT"
     return str(kind)
 
 

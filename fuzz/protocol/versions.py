@@ -4,7 +4,9 @@ For each plan type we keep the set of plans the vehicle may be storing now. A wr
 upload, a clear, a stray MISSION_COUNT 0 or MISSION_CLEAR_ALL) that the vehicle confirmed
 replaces the set; one whose outcome is unknown (the two-generals case: the last item went
 out, the ACK never came back) adds its plan to it; one that definitely failed leaves it
-alone. Writes that overlap in time (a second GCS, a stray message mid-transfer) may have
+alone (an upload refused before a single item went out, e.g. DENIED by the operator-control
+filter to a GCS not in control, changed nothing even on a non-atomic vehicle: `untouched`).
+Writes that overlap in time (a second GCS, a stray message mid-transfer) may have
 landed in any order, so a group of them is folded in at once. Whenever the vehicle's
 plan is observed (in-process: read; over the wire: downloaded), it must be one of the set,
 and the set shrinks to it. Plans are compared in the target's stored form (`StoredForm`:
@@ -38,6 +40,7 @@ class Write:
     plans: tuple[Plan, ...]
     confirmed: bool        # the vehicle said it is done (ACCEPTED)
     maybe: bool            # not confirmed, and it may have been applied
+    untouched: bool = False   # refused before any item went out: nothing of it applied, anywhere
 
 
 class Versions:
@@ -75,7 +78,7 @@ class Versions:
         for t, group in by_type.items():
             confirmed = [stored(p) for w in group if w.confirmed for p in w.plans]
             maybe = [stored(p) for w in group if w.maybe for p in w.plans]
-            incomplete = any(not w.confirmed for w in group)
+            incomplete = any(not w.confirmed and not w.untouched for w in group)
             if not self.atomic and incomplete:
                 # an unfinished upload may have left a mix; a confirmed one in the same
                 # group may have landed before it

@@ -21,6 +21,12 @@ GCSs' is a tool error, and neither is a traceback here.
 The oracles' rules (`Profile`) are the target's: its own profile in-process, the spec for a
 mutant, and for a UDP target `--profile` or the builtin profile of the autopilot family its
 HEARTBEAT names.
+
+With `handover` (`--operator-control`) the in-process vehicle is its own operator-control system
+manager (`control.HANDOVER_CONTROL`; an HO mutant brings its own, broken, copy of it) and sits
+inside a `ControlWatch`, the judge of the control invariants; GCSs A and B run a control
+client and send HEARTBEAT (the owner-loss rule counts them). A UDP target must already be a
+system manager: it must send CONTROL_STATUS (`require_control_status`).
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from typing import Any, Callable, Iterator
 from mavconform.conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, profile_for_autopilot
 from mavconform.conformance.session import build_vehicle
 from mavconform.conformance.target_uri import TargetUri, parse_target
+from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.mission.timing import Timings
 from mavconform.reference_impl.net import FaultModel, SimNetwork
@@ -42,10 +49,12 @@ from mavconform.reference_impl.net.sim import CaptureHook
 from mavconform.reference_impl.vehicle import VehicleNode
 
 from .connection import TargetConnection
+from .control import HANDOVER_CONTROL, ControlRules, ControlWatch, WireControl
 from .faults import install
 from .gcs import FuzzGcs
 
 SYSTEM_A, SYSTEM_B, SYSTEM_PROBE, SYSTEM_MUTE, COMPONENT = 245, 246, 247, 248, 190
+NAMES = {SYSTEM_A: "GCS A", SYSTEM_B: "GCS B", SYSTEM_PROBE: "the probe GCS", SYSTEM_MUTE: "the mute GCS"}
 OUR_NODES = ("a", "b", "probe", "mute")   # an exception in one of these is our bug
 # Over real sockets every dropped message costs our GCS a real timeout: a fuzz GCS need not
 # wait the spec's 1.5 s for a reply that comes within milliseconds on loopback, and a quick
@@ -96,9 +105,13 @@ def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | No
 class World:
     def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
                  atomic: bool | None = None, connection: TargetConnection | None = None,
-                 profile: str | None = None, latency: float = 0.0) -> None:
+                 profile: str | None = None, latency: float = 0.0, handover: bool = False) -> None:
         self.uri = parse_target(target)
         self.seed = seed
+        self.handover = handover
+        self.watch: ControlWatch | None = None       # in-process, with handover
+        self.wire: WireControl | None = None         # over UDP, with handover
+        self.rules = ControlRules.of(HANDOVER_CONTROL)
         self.latency = latency                 # one-way, every simulated link (in-process only)
         self.virtual = self.uri.in_process
         self.vehicle: VehicleNode | None = None
@@ -136,6 +149,11 @@ class World:
             return model
         return dataclasses.replace(model, delay=model.delay + self.latency)
 
+    def link_clean(self) -> bool:
+        """The shared link of a UDP target has no faults now (judged over UDP only: in-process
+        every link carries the simulated latency)."""
+        return self._up.is_clean and self._down.is_clean
+
     @contextmanager
     def faults_lifted(self) -> Iterator[None]:
         """A clean link while the body runs, where the probe shares A's (UDP targets); the
@@ -161,6 +179,10 @@ class World:
         """Nothing in flight (virtual time; over UDP in-flight datagrams cannot be seen)."""
         return not self.virtual or self.driver.in_flight() == 0
 
+    def control_error(self) -> BaseException | None:
+        """An exception in our control judge (inside the vehicle's calls): a bug of ours."""
+        return self.watch.error if self.watch is not None else None
+
     def crashes(self) -> list[str]:
         """Exceptions the target raised (an in-process vehicle): a finding."""
         return [f"{name}: {g.crash}" for name, g in self.guards.items()
@@ -183,10 +205,11 @@ class World:
             self.connection.close()
 
     # --- wiring ---------------------------------------------------------------------------
-    def _gcs(self, system: int, target: Any, *, heartbeat: bool, mute: bool = False) -> FuzzGcs:
+    def _gcs(self, system: int, target: Any, *, heartbeat: bool, mute: bool = False,
+             control: bool = False) -> FuzzGcs:
         return FuzzGcs(system, COMPONENT, target, heartbeat=heartbeat, mute=mute,
                        timings=None if self.virtual else UDP_GCS_TIMINGS,
-                       wall_clock=self.driver.clock.wall)
+                       wall_clock=self.driver.clock.wall, control=control)
 
     @property
     def gcss(self) -> dict[str, FuzzGcs]:
@@ -197,15 +220,22 @@ class World:
         # Each fuzz GCS (a, b, the mute one, the probe) has an address of its own here, so the
         # vehicle must read them all: a profile's single-peer link (VARIANTS.md L1/L2) would
         # hear only the first. Several identities on one link is the UDP fuzzer's to learn.
-        self.vehicle = build_vehicle(self.uri, single_peer_link=False)
+        extra = {"control": HANDOVER_CONTROL} if self.handover else {}
+        self.vehicle = build_vehicle(self.uri, single_peer_link=False, **extra)
         cfg = self.vehicle.config
         target = (cfg.system, cfg.component)
-        self.a = self._gcs(SYSTEM_A, target, heartbeat=False)
-        self.b = self._gcs(SYSTEM_B, target, heartbeat=False)
+        ho = self.handover
+        self.a = self._gcs(SYSTEM_A, target, heartbeat=ho, control=ho)
+        self.b = self._gcs(SYSTEM_B, target, heartbeat=ho, control=ho)
         self.probe = self._gcs(SYSTEM_PROBE, target, heartbeat=False)
         self.mute = self._gcs(SYSTEM_MUTE, target, heartbeat=False, mute=True)
         self.target = target
-        self._guard(net.add_node, "vehicle", self.vehicle)
+        node: Any = self.vehicle
+        if ho:
+            if self.vehicle.control is None:
+                raise UsageError(f"--operator-control: {self.uri} was built without operator control")
+            node = self.watch = ControlWatch(self.vehicle, self.rules, describe_system)
+        self._guard(net.add_node, "vehicle", node)
         for name, gcs in (("a", self.a), ("b", self.b), ("probe", self.probe), ("mute", self.mute)):
             self._guard(net.add_node, name, gcs)
             gcs.endpoint.add_address("vehicle")
@@ -226,8 +256,11 @@ class World:
         self._up, self._down = connection.up, connection.down
         self.shared = True
         self.target = connection.target
-        self.a = self._gcs(SYSTEM_A, self.target, heartbeat=True)
-        self.b = self._gcs(SYSTEM_B, self.target, heartbeat=False)
+        ho = self.handover
+        self.a = self._gcs(SYSTEM_A, self.target, heartbeat=True, control=ho)
+        self.b = self._gcs(SYSTEM_B, self.target, heartbeat=ho, control=ho)
+        if ho:
+            self.wire = WireControl(describe_system)
         self.probe = self._gcs(SYSTEM_PROBE, self.target, heartbeat=False)
         self.mute = self._gcs(SYSTEM_MUTE, self.target, heartbeat=False, mute=True)
         for gcs in (self.a, self.b, self.probe, self.mute):
@@ -242,6 +275,11 @@ class World:
     def _guarded(self, name: str, node: Any) -> GuardedNode:
         guard = self.guards[name] = GuardedNode(node)
         return guard
+
+
+def describe_system(sysid: int) -> str:
+    """A GCS by the name the findings use (A, B, the probe, the mute one), else by its id."""
+    return NAMES.get(sysid, f"GCS {sysid}")
 
 
 def _never() -> bool:
