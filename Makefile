@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test run run-profiles run-mavsdk demo fuzz fault-table vectors bench clean
+.PHONY: setup test run run-profiles run-mavsdk demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -64,11 +64,15 @@ vectors: setup       ## golden vectors: regenerate and compare, verify (ours), c
 	$(BIN)/mavconform vectors verify
 	$(BIN)/python tools/vectors_crosscheck.py
 
+handover: setup      ## the thesis's delivery flight, two handovers, in virtual time -> reports/handover/
+	$(BIN)/mavconform handover run delivery-flight --report-dir reports/handover
+
 bench: setup         ## figures, not pass/fail
 	$(BIN)/python bench/transfer_vs_codec.py
 	$(BIN)/python bench/conformance_wall.py
 	$(BIN)/python bench/protocol_fuzz.py
 	$(BIN)/python bench/frame_fuzz.py
+	$(BIN)/python bench/handover_scenario.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot reports/mavsdk fuzz-findings
+	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot reports/mavsdk reports/handover fuzz-findings

@@ -28,7 +28,7 @@ from mavconform.fuzz.case import dump_case, save_case  # noqa: E402
 from mavconform.fuzz.frames import FrameCampaign  # noqa: E402
 from mavconform.fuzz.frames.admission import Admission  # noqa: E402
 from mavconform.fuzz.frames.mutators import MutationContext  # noqa: E402
-from mavconform.fuzz.frames.program import CHUNK, RECORD, Builder, parse  # noqa: E402
+from mavconform.fuzz.frames.program import RECORD, Builder, parse  # noqa: E402
 from mavconform.fuzz.frames.rig import campaign_key  # noqa: E402
 from mavconform.reference_impl.wire.codec import FrameDecoder  # noqa: E402
 

@@ -405,7 +405,7 @@ def print_phases(ph: Phases, wall: float, examples: int) -> None:
     print(f"  run_until: {inside:.2f} s, of which select() {sel_ev + sel_to:.2f} s in {nsel} calls "
           f"(ended by a datagram {sel_ev:.2f} s, by its timeout {sel_to:.2f} s), CPU "
           f"{inside - sel_ev - sel_to:.2f} s")
-    print(f"\n  the wire ledger (run_until time cut at every datagram, retry timer and return)")
+    print("\n  the wire ledger (run_until time cut at every datagram, retry timer and return)")
     total = sum(ph.wire.values())
     for key, t in sorted(ph.wire.items(), key=lambda kv: -kv[1]):
         tag = "forced" if key in FORCED_WIRE else "not forced"
@@ -546,7 +546,7 @@ def run(args: argparse.Namespace, profile: str | None) -> int:
             acc[0] += w
             acc[1] += v
             acc[2] += 1
-    print(f"  per step kind (excess = wall - virtual; with faults on, noisy: the fault draws differ)")
+    print("  per step kind (excess = wall - virtual; with faults on, noisy: the fault draws differ)")
     print(f"  {'step':12s} {'n':>5s} {'wall s':>8s} {'virtual s':>10s} {'excess s':>9s} {'excess/step':>12s}")
     for op, (w, v, n) in sorted(by_op.items(), key=lambda kv: -(kv[1][0] - kv[1][1])):
         print(f"  {op:12s} {n:5d} {w:8.2f} {v:10.2f} {w - v:9.2f} {1000 * (w - v) / n:10.0f}ms")

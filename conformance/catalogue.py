@@ -1,10 +1,12 @@
-"""Every clause the suite decides, as data: the vehicle side of the Mission Protocol (MIS.*)
-and of operator control, the MAVLink layer of authority handover (HO.*).
+"""Every clause the suite decides, as data: the vehicle side of the Mission Protocol (MIS.*),
+of operator control, the MAVLink layer of authority handover (HO.CTL.*), and of the thesis's
+handover procedure carried over it (HO.SEQ.*).
 
 Sources are the seed texts under ../shared/seeds (the Mission Protocol restated in seed
 000, framing and routing in seed 001) and the upstream XML where the seed is silent and
 upstream speaks (MISSION_CURRENT streaming, opaque_id, MAV_MISSION_TYPE_ALL); operator
-control is upstream development.xml's (MAV_CMD_REQUEST_OPERATOR_CONTROL, CONTROL_STATUS).
+control is upstream development.xml's (MAV_CMD_REQUEST_OPERATOR_CONTROL, CONTROL_STATUS); the
+handover procedure is the thesis's in seed 003, chapter 4, as docs/handover.md maps it.
 Levels follow the source's own words; where a sentence mixes "must" and "should" the
 clause takes the word that governs the behaviour checked. Ids are stable: a retired clause keeps its id.
 """
@@ -19,6 +21,8 @@ from .clause import SEED_000, SEED_001, UPSTREAM, Clause, Level, Role
 
 # MAV_CMD_REQUEST_OPERATOR_CONTROL and CONTROL_STATUS (HO.CTL.*) are in the development dialect
 DEVELOPMENT = "mavlink-upstream/development.xml"
+# the thesis whose authority handover procedure (chapter 4) the HO.SEQ.* clauses check
+SEED_003 = "seeds/003_b23246273ffd6472.txt"
 
 MUST, SHOULD, MAY = Level.MUST, Level.SHOULD, Level.MAY
 V = Role.VEHICLE
@@ -61,6 +65,20 @@ _STATUS_RATE = ("This should be broadcast at low rate (nominally 1 Hz) and emitt
 _GRANT = ("The system manager component should grant control to the requested GCS(s) if the system "
           "does not require takeover permission (or is uncontrolled) and ACK the request with "
           "MAV_RESULT_ACCEPTED.")
+
+# The thesis's handover procedure (seed 003, ch. 4) over operator control, as docs/handover.md
+# maps its six messages to MAV_CMD_REQUEST_OPERATOR_CONTROL traffic (what each clause checks on
+# the wire is that mapping: its title names the step). The thesis is a design description: its
+# modal words are in 4.1, the application scenario, where 319 says the HO module "must notify
+# the GCS-A" on entering the region and, "If communication with the GCS-A is successful", will
+# "respond only to the GCS-B". Its procedure sentences (4.3.3, 4.5, 4.6) carry no modal; each
+# takes the level of the 4.1 requirement it elaborates, as HO.CTL.09's does: what decides who
+# commands (the commander is told, control moves only on its word, then only the new commander
+# commands, and a commander that never answers keeps control) elaborates 319: MUST. The means
+# toward the partner (the invitation's and the connect notice's form) and the one-handover-per-
+# entry rule (docs/handover.md's latch) elaborate no modal sentence: SHOULD.
+_WILL_RESPOND = ("If communication with the GCS-A is successful, the HO module will respond only to "
+                 "the GCS-B.")
 
 CLAUSES: tuple[Clause, ...] = (
     # --- upload ---------------------------------------------------------------------------
@@ -276,6 +294,39 @@ CLAUSES: tuple[Clause, ...] = (
     _c("HO.CTL.13", SHOULD, "When the owner's HEARTBEATs stop, CONTROL_STATUS comes with no owner",
        f"{DEVELOPMENT}:226", "If all owning GCS are disconnected the vehicle should GCS loss failsafe, and "
        "broadcast a CONTROL_STATUS indicating that it has no owner(s)."),
+    # --- the handover sequence (seed 003 ch. 4 over operator control; see _WILL_RESPOND above) ---
+    _c("HO.SEQ.01", SHOULD, "On entering the handover region the vehicle invites the partner: "
+       "MAV_CMD_REQUEST_OPERATOR_CONTROL to it, param4 = the partner (docs/handover.md step 1)",
+       f"{SEED_003}:372", "When the mission computer detects the vehicle flying over the handover region (as "
+       "referenced in Chapter 4.6), it initiates the authority handover procedure. This procedure commences "
+       "with the drone transmitting a signal to establish a connection with the ground control station to "
+       "which authority will be transferred, referred to as \"the partner.\""),
+    _c("HO.SEQ.02", MUST, "The partner's request reaches the commander: the vehicle relays it as the same "
+       "command, param4 = the partner (docs/handover.md step 2)",
+       f"{SEED_003}:319", "Upon entering the handover region, the HO module must notify the GCS-A that it will "
+       "transfer the authority over the mission to the GCS-B."),
+    _c("HO.SEQ.03", MUST, "Control does not move to the partner before the commander authorises: its "
+       "requests are refused and CONTROL_STATUS keeps naming the commander",
+       f"{SEED_003}:372", "Following this, the vehicle awaits authorization from the current GCS, known as "
+       "\"the commander.\""),
+    _c("HO.SEQ.04", MUST, "Once the commander authorises (allows takeover), the partner's request is granted "
+       "and CONTROL_STATUS names the partner (docs/handover.md steps 3-4)",
+       f"{SEED_003}:374", "Finally, the vehicle disconnects from the current ground control station and "
+       "switches to the new commander."),
+    _c("HO.SEQ.05", SHOULD, "After the grant the vehicle sends the partner the connect notice: the same "
+       "command, param4 = the partner (docs/handover.md step 4)",
+       f"{SEED_003}:499", "After receiving the authorization, the drone will send the message "
+       "`CONNECT_HANDOVER` to the partner."),
+    _c("HO.SEQ.06", MUST, "After the handover only the new commander commands: the old commander's command "
+       "gets MAV_RESULT_NOT_IN_CONTROL, the new one's does not",
+       f"{SEED_003}:319", _WILL_RESPOND),
+    _c("HO.SEQ.07", MUST, "A commander that never authorises keeps control: the handover ends within its bound "
+       "without a switch (docs/handover.md, Bound)",
+       f"{SEED_003}:319", _WILL_RESPOND),
+    _c("HO.SEQ.08", SHOULD, "One handover per entry into the region: while the vehicle stays inside after a "
+       "handover, no new invitation (docs/handover.md, hysteresis)",
+       f"{SEED_003}:512", "Consequently, when the mission computer detects that the drone has entered this "
+       "region, it triggers the authority handover process."),
 )
 
 BY_ID: dict[str, Clause] = {c.id: c for c in CLAUSES}

@@ -36,6 +36,7 @@ class RunOptions:
     seed: int = 0
     expectations: str | None = None
     baseline: str | None = None
+    handover_scenario: str | None = None   # --handover-scenario (None: the conformance scenario)
 
 
 def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
@@ -60,6 +61,7 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
             "expectations": options.expectations, "baseline": options.baseline,
             "interrupted": run.interrupted,
             "interrupted_at": run.interrupted_at, "interrupted_by": run.interrupted_by,
+            **({"handover_scenario": options.handover_scenario} if options.handover_scenario else {}),
         },
         "identity": identity,
         "summary": {"total": len(run.results), **counts, "gating_failures": failing,

@@ -29,6 +29,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     g.addoption("--mavlink-time-scale", type=float, default=1.0, metavar="X", help="stretch waits by X")
     g.addoption("--mavlink-allow-flight", action="store_true", help="let progress clauses fly")
     g.addoption("--mavlink-report-dir", metavar="DIR", help="write run.json/junit/md/html/mcap here")
+    g.addoption("--mavlink-handover-scenario", metavar="FILE",
+                help="the handover scenario the target's mission computer runs (HO.SEQ clauses; default: "
+                     "the shipped conformance scenario)")
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -72,10 +75,18 @@ def _prepared(config: pytest.Config):
             parse_target(config.getoption("--mavlink-target"))
         except UsageError as exc:
             raise pytest.UsageError(f"--mavlink-target: {exc}") from None
+        if config.getoption("--mavlink-handover-scenario"):
+            from .target_uri import load_handover_scenario
+            try:
+                load_handover_scenario(config.getoption("--mavlink-handover-scenario"),
+                                       option="--mavlink-handover-scenario")
+            except UsageError as exc:
+                raise pytest.UsageError(str(exc)) from None
         options = document.RunOptions(
             target=config.getoption("--mavlink-target"), clauses=config.getoption("--mavlink-clauses"),
             strict=config.getoption("--mavlink-strict"), time_scale=config.getoption("--mavlink-time-scale"),
-            expectations=config.getoption("--mavlink-expect"))
+            expectations=config.getoption("--mavlink-expect"),
+            handover_scenario=config.getoption("--mavlink-handover-scenario"))
         try:
             _STATE["prepared"] = suite.prepare(options, report_dir=config.getoption("--mavlink-report-dir"))
         except UsageError as exc:

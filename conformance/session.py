@@ -68,6 +68,7 @@ class Session:
         self.guard: GuardedNode | None = None   # an in-process vehicle that raises stops here
         self.target_address: Any = None
         self._second: Tester | None = None
+        self._more: dict[int, Tester] = {}      # GCSs with other system ids (`gcs`)
         node = TesterNode("tester", TESTER_SYSTEM, TESTER_COMPONENT)
         self.link = SharedLink(node)
         if virtual:
@@ -151,27 +152,44 @@ class Session:
         """A second GCS (another system id; on the first one's link or a socket of its own,
         as `shared_link` says), created on first use."""
         if self._second is None:
-            node = TesterNode("tester2", TESTER2_SYSTEM, TESTER_COMPONENT)
-            node.target = self.t.node.target
-            if self.shared_link:
-                self.link.join(node)
-            elif self.virtual:
-                self.driver.add_node("tester2", node)
-                self.driver.connect("tester2", "vehicle")
-            else:
-                host = self.target_address[0] if isinstance(self.target_address, tuple) else "127.0.0.1"
-                self.driver.add_node(node, bind=(local_bind_for(host), 0))
-            node.endpoint.add_address(self.target_address)
-            tester = Tester(node, self.driver, scale=self.scale)
-            tester.form = self.t.form
-            tester.plan_ids = self.t.plan_ids   # one record of accepted plans for both GCSs
-            tester.exchange = self.t.exchange
-            record_traffic(tester)
-            self._second = tester
-            # announce it (a HEARTBEAT), so the target learns where tester2 lives
-            node.poll(self.t.now())
-            self.driver.run_until(_always, timeout=0.0)
+            self._second = self._new_gcs("tester2", TESTER2_SYSTEM)
         return self._second
+
+    def gcs(self, system: int) -> Tester:
+        """The GCS with system id `system`: the first or the second GCS when it is theirs,
+        else one more made as the second is, on first use (the handover clauses play the
+        GCSs a handover scenario names). It shares the first GCS's exchange for the clause
+        that makes it; a check that uses it in a later clause gives it that clause's."""
+        if system == self.t.node.endpoint.system:
+            return self.t
+        if system == TESTER2_SYSTEM:
+            return self.second()
+        if system not in self._more:
+            self._more[system] = self._new_gcs(f"gcs{system}", system)
+        return self._more[system]
+
+    def _new_gcs(self, name: str, system: int) -> Tester:
+        """A GCS with system id `system`, on the first one's link or a socket of its own."""
+        node = TesterNode(name, system, TESTER_COMPONENT)
+        node.target = self.t.node.target
+        if self.shared_link:
+            self.link.join(node)
+        elif self.virtual:
+            self.driver.add_node(name, node)
+            self.driver.connect(name, "vehicle")
+        else:
+            host = self.target_address[0] if isinstance(self.target_address, tuple) else "127.0.0.1"
+            self.driver.add_node(node, bind=(local_bind_for(host), 0))
+        node.endpoint.add_address(self.target_address)
+        tester = Tester(node, self.driver, scale=self.scale)
+        tester.form = self.t.form
+        tester.plan_ids = self.t.plan_ids   # one record of accepted plans for all GCSs
+        tester.exchange = self.t.exchange
+        record_traffic(tester)
+        # announce it (a HEARTBEAT), so the target learns where it lives
+        node.poll(self.t.now())
+        self.driver.run_until(_always, timeout=0.0)
+        return tester
 
     def shared(self, key: str, observe: Callable[[], Any]) -> Any:
         """An observation several clauses decide from (e.g. one silent upload serves the
@@ -196,7 +214,7 @@ class Session:
         return value
 
     def testers(self) -> list[Tester]:
-        return [self.t] + ([self._second] if self._second is not None else [])
+        return [self.t] + ([self._second] if self._second is not None else []) + list(self._more.values())
 
     def run_for(self, seconds: float) -> None:
         self.driver.run_until(_never, timeout=seconds * self.scale)

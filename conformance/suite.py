@@ -23,7 +23,7 @@ from .clause import Clause
 from .outcome import ClauseResult
 from .runner import InterruptGuard, OnResult, RunOutcome, interrupted_before_start, run_clauses
 from .session import Session
-from .target_uri import TargetUri, parse_target
+from .target_uri import TargetUri, load_handover_scenario, parse_target
 
 CAPTURE_NAME = "run.mcap"
 
@@ -44,6 +44,8 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
     if not (options.time_scale > 0 and math.isfinite(options.time_scale)):
         raise UsageError(f"--time-scale must be a finite number > 0, got {options.time_scale!r}")
     uri = parse_target(options.target)
+    if options.handover_scenario:
+        uri = uri.with_scenario(load_handover_scenario(options.handover_scenario))
     clauses = catalogue.select(options.clauses, levels)
     if not clauses:
         raise UsageError(f"no clause matches --clauses {options.clauses!r} with --level {levels!r}")

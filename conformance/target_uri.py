@@ -25,15 +25,36 @@ HO clauses are not-applicable, as on any target that sends no CONTROL_STATUS or 
 (mutants/operator_control.py) turn the same `SUITE_CONTROL` on, the others leave it off.
 The fuzzers build their vehicles without these overrides (`session.build_vehicle`).
 `mavconform vehicle --operator-control --open-when-unowned` serves what `builtin:spec` runs.
+
+The handover sequence (the HO.SEQ clauses: the thesis's procedure, seed 003 ch. 4, over
+operator control; docs/handover.md). The tester must know what the target's mission
+computer was loaded with: which GCS is the parent, every GCS's system id and coverage, the
+dwell and the bound. A handover scenario file says it (`--handover-scenario FILE`, read by
+`reference_impl/handover/scenario.py`; the URI carries it as `scenario`); without one it is
+the shipped `scenarios/conformance.json` (`conformance_scenario()`): the suite's two GCSs,
+245 and 246, with 150 m discs, A's around the reference home and B's 250 m east, so the
+handover region is the lens 100-150 m east of home. Under the suite `builtin:spec` also runs
+the thesis's mission computer loaded from that same scenario (`handover_config`, as
+`mavconform vehicle --handover` loads it), so the HO.SEQ clauses pass on it; the mission
+clauses never ask for control, and a mission computer hands over only from a commander, so
+their flights (25-75 m north of home, in A's disc only) never start one. The profiles and
+every mutant but the HO.SEQ ones (mutants/handover_sequence.py) have none: there the HO.SEQ
+clauses are not-applicable. The HO.SEQ mutants always run the conformance scenario's mission
+computer, whatever `--handover-scenario` says. The suite's GCSs do not sign: against a vehicle
+loaded with a scenario that has GCS keys, let it accept unsigned frames
+(`mavconform vehicle --handover FILE --accept-unsigned`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import lru_cache
 from typing import Any
 
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.handover.control_manager import ManagerConfig
+from mavconform.reference_impl.handover.mission_computer import MissionComputerConfig
+from mavconform.reference_impl.handover.scenario import SCENARIOS_DIR, Scenario, load_scenario, scenario_path
 from mavconform.reference_impl.net.uri import (FORMS as UDP_FORMS, SCHEMES as UDP_SCHEMES, UdpUri,
                                                 parse_udp_uri)
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES
@@ -45,12 +66,53 @@ FORMS = f"builtin:spec|px4|ardupilot, mutant:NAME, {UDP_FORMS}"
 # every GCS while none is in control.
 SUITE_CONTROL = ManagerConfig(open_when_unowned=True)
 
+# The handover scenario the HO.SEQ clauses assume when none is given (see the docstring).
+CONFORMANCE_SCENARIO = SCENARIOS_DIR / "conformance.json"
+
+
+@lru_cache(maxsize=None)
+def conformance_scenario() -> Scenario:
+    return load_scenario(CONFORMANCE_SCENARIO)
+
+
+def handover_config(scenario: Scenario) -> MissionComputerConfig:
+    """The mission computer's load from a scenario, as `mavconform vehicle --handover` loads
+    it (scenario_fleet): the parent, every GCS's coverage by system id, the dwell, the bound,
+    the acceptance radius; the emergency procedure stays off (nothing here judges it)."""
+    return MissionComputerConfig(parent=scenario.gcs_named(scenario.parent).sysid,
+                                 coverages={g.sysid: g.coverage for g in scenario.gcs},
+                                 dwell=scenario.timeouts.dwell_s, bound=scenario.timeouts.handover_bound_s,
+                                 acceptance_radius_m=scenario.flight.acceptance_radius_m)
+
+
+@lru_cache(maxsize=None)
+def suite_handover() -> MissionComputerConfig:
+    """The mission computer `builtin:spec` (and every HO.SEQ mutant) runs under the suite by
+    default: loaded from the conformance scenario."""
+    return handover_config(conformance_scenario())
+
+
+def load_handover_scenario(text: str, option: str = "--handover-scenario") -> Scenario:
+    """`--handover-scenario FILE`: a scenario file, or the name of a shipped one (`conformance`,
+    `delivery-flight`, ...). A mistake is one `UsageError` line naming the option and the file
+    (and the field)."""
+    try:
+        scenario = load_scenario(scenario_path(text))
+    except UsageError as exc:
+        raise UsageError(f"{option}: {exc}") from None
+    from .checks.handover_sequence import route_of   # the clauses say what they can fly
+    route_of(scenario, option=f"{option} {text}")
+    return scenario
+
 
 @dataclass(frozen=True)
 class TargetUri:
     kind: str                 # builtin | mutant | udp | udpin
     name: str = ""            # profile or mutant name
     udp: UdpUri | None = None
+    # what the target's mission computer was loaded with (--handover-scenario); None: the
+    # conformance scenario (`handover_scenario`)
+    scenario: Scenario | None = None
 
     @property
     def in_process(self) -> bool:
@@ -59,12 +121,22 @@ class TargetUri:
     def __str__(self) -> str:
         return f"{self.kind}:{self.name}" if self.in_process else str(self.udp)
 
+    @property
+    def handover_scenario(self) -> Scenario:
+        """The handover scenario the HO.SEQ clauses assume of this target."""
+        return self.scenario if self.scenario is not None else conformance_scenario()
+
+    def with_scenario(self, scenario: Scenario | None) -> "TargetUri":
+        return replace(self, scenario=scenario)
+
     def suite_overrides(self) -> dict[str, Any]:
         """`VehicleConfig` fields the conformance suite sets on the in-process vehicle this
-        URI names: operator control on `builtin:spec` (see the module docstring), nothing
-        elsewhere. The fuzzers do not apply them: their vehicle stays the profile's."""
+        URI names: operator control and the mission computer (loaded from the handover
+        scenario) on `builtin:spec` (see the module docstring), nothing elsewhere. The
+        fuzzers do not apply them: their vehicle stays the profile's."""
         if self.kind == "builtin" and self.name == "spec":
-            return {"control": SUITE_CONTROL}
+            handover = suite_handover() if self.scenario is None else handover_config(self.scenario)
+            return {"control": SUITE_CONTROL, "handover": handover}
         return {}
 
 

@@ -15,7 +15,7 @@ import sys
 
 from mavconform.reference_impl.errors import LocalProtocolError, UsageError
 
-from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, fuzz_cmd, gcs_cmd, profiles_cmd,
+from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, fuzz_cmd, gcs_cmd, handover_cmd, profiles_cmd,
                proxy_cmd, report_cmd, run_cmd, vectors_cmd, vehicle_cmd)
 
 EXIT_USAGE = 2
@@ -48,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
     fuzz_cmd.add_parser(sub)
     proxy_cmd.add_parser(sub)
     vectors_cmd.add_parser(sub)
+    handover_cmd.add_parser(sub)
     return parser
 
 

@@ -58,6 +58,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed recorded in the report (default 0)")
     p.add_argument("--allow-flight", action="store_true",
                    help="let progress clauses start the mission (always on for builtin targets)")
+    p.add_argument("--handover-scenario", metavar="FILE|NAME",
+                   help="the handover scenario the target's mission computer was loaded with (GCS ids, "
+                        "coverages, dwell, bound): what the HO.SEQ clauses fly; a file, or a shipped "
+                        "scenario's name (default: conformance, the one builtin:spec runs)")
     p.add_argument("--no-restore", action="store_true",
                    help="do not read the target's plans first and put them back afterwards")
     p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
@@ -74,7 +78,8 @@ def run(args: argparse.Namespace) -> int:
     with sigterm_as_interrupt():
         options = document.RunOptions(target=args.target, clauses=args.clauses, strict=args.strict,
                                       time_scale=args.time_scale, seed=args.seed,
-                                      expectations=args.expect, baseline=args.baseline)
+                                      expectations=args.expect, baseline=args.baseline,
+                                      handover_scenario=args.handover_scenario)
         prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
         print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
         on_result = None if args.quiet else _printer()

@@ -16,6 +16,7 @@ from mavconform.reference_impl.net.uri import FORMS
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 from mavconform.reference_impl.vehicle import VehicleNode
 
+from . import handover_cmd
 from .options import (add_fault_options, capture_to, describe_faults, fault_model, mavlink_id, positive,
                       seconds_up_to, seq_number, sigterm_as_interrupt)
 
@@ -46,6 +47,7 @@ examples:
   mavconform vehicle --listen udp:127.0.0.1:0 --loss 0.1 --reorder 0.05 --seed 7
   mavconform vehicle --connect udp:127.0.0.1:14551     # talk first to a GCS listening there
   mavconform vehicle --operator-control --owner-loss 3 # `mavconform gcs control request` first
+  mavconform vehicle --handover delivery-flight        # a handover scenario's vehicle (`mavconform handover list`)
   mavconform vehicle --operator-control --signing-roster gcss.json
       # gcss.json: [{"sysid": 201, "name": "A", "key": "<64 hex digits>"},
       #             {"sysid": 202, "name": "B", "passphrase": "words only B knows"}]
@@ -99,6 +101,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--accept-unsigned", action="store_true",
                    help="with --signing-roster: let unsigned frames through (a signed frame must "
                         "still check out; a system not in the roster still never gains control)")
+    p.add_argument("--handover", metavar="SCENARIO",
+                   help="be a handover scenario's vehicle (a .json/.yaml file or a shipped name, `mavconform "
+                        "handover list`): its system manager, mission computer (coverage, parent, dwell, bound) "
+                        "and GCS keys, its flight stored as the mission; handover events print as they happen")
     add_fault_options(p)
     p.set_defaults(run=run)
 
@@ -106,6 +112,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     listen = parse_udp_uri(args.listen, role="listen", option="--listen")
     connect = parse_udp_uri(args.connect, role="peer", option="--connect") if args.connect else None
+    scenario = handover_cmd.vehicle_scenario(args) if args.handover else None
     profile = load_profile(args.profile)
     behaviour = profile.behaviour
     if args.capacity is not None:
@@ -116,9 +123,13 @@ def run(args: argparse.Namespace) -> int:
                                  single_peer_link=args.single_peer, control=_control(args))
     if roster is not None:
         config = dataclasses.replace(config, roster=roster, require_signature=not args.accept_unsigned)
+    if scenario is not None:
+        config, handover_lines = handover_cmd.vehicle_for_scenario(scenario, config, accept_unsigned=args.accept_unsigned)
     faults = fault_model(args)
     clock = MonotonicClock()
     vehicle = _mutant(args.mutant, config, args.profile) if args.mutant else VehicleNode(config, wall_clock=clock.wall)
+    if scenario is not None:
+        handover_cmd.preload_flight(vehicle, scenario)
     with UdpDriver(clock=clock, seed=args.seed) as driver:
         address = driver.add_node(vehicle, bind=listen.address, outgoing=faults, incoming=faults)
         if connect is not None:
@@ -136,6 +147,8 @@ def run(args: argparse.Namespace) -> int:
                 unsigned = "accepted" if args.accept_unsigned else "dropped"
                 print(f"signing: {len(roster.gcss)} GCSs known from {args.signing_roster} ({names}); "
                       f"unsigned frames {unsigned}", flush=True)
+            if scenario is not None and not args.quiet:
+                print("\n".join(handover_lines), flush=True)
             _serve(driver, vehicle, clock, args)
     return 0
 
@@ -143,8 +156,8 @@ def run(args: argparse.Namespace) -> int:
 def _roster(args: argparse.Namespace) -> Roster | None:
     """The --signing-roster file, checked before any socket is opened."""
     if args.signing_roster is None:
-        if args.accept_unsigned:
-            raise UsageError("--accept-unsigned needs --signing-roster")
+        if args.accept_unsigned and not args.handover:
+            raise UsageError("--accept-unsigned needs --signing-roster (or --handover)")
         return None
     roster = load_roster(args.signing_roster)
     for i, gcs in enumerate(roster.gcss, 1):

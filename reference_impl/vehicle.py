@@ -19,11 +19,13 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from .endpoint import MavlinkEndpoint
-from .flight import FlightSim, Position
+from .flight import FlightBattery, FlightSim, Position
 from .handover import control_messages as cm
 from .handover.authenticity import Roster, UnknownGcsGate
 from .handover.control_manager import ControlManager, ManagerConfig
 from .handover.control_results import ControlChanged, OwnerLost
+from .handover.emergency_procedure import (EmergencyEnded, EmergencyStarted, RevokeControl, check_loss_timeout,
+                                           revoke_owner)
 from .handover.geo import GeoPoint
 from .handover.mission_computer import (HandoverFinished, HandoverStarted, MissionComputer, MissionComputerConfig,
                                         WithdrawTakeover, mission_waypoints)
@@ -81,6 +83,9 @@ class VehicleConfig:
     # handover, as before. Set (needs `control`): it is told the flight's position, starts
     # the handover sequence in a handover region and withdraws what an aborted one left open.
     handover: MissionComputerConfig | None = None
+    # The flight's battery (flight.FlightBattery: the scenario's energy model and charge),
+    # drained by distance flown; the emergency procedure plans its refuge with it. None: none.
+    battery: FlightBattery | None = None
 
 
 class VehicleNode:
@@ -89,7 +94,8 @@ class VehicleNode:
     def __init__(self, config: VehicleConfig | None = None, *,
                  wall_clock: Callable[[], float] = time.time,
                  server_class: type[MissionServer] = MissionServer,
-                 manager_class: type[ControlManager] = ControlManager) -> None:
+                 manager_class: type[ControlManager] = ControlManager,
+                 mission_computer_class: type[MissionComputer] = MissionComputer) -> None:
         self.config = cfg = config or VehicleConfig()
         keyring = cfg.roster.keyring(cfg.system, cfg.signing) if cfg.roster is not None else None
         self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
@@ -98,7 +104,8 @@ class VehicleNode:
         self.gate = UnknownGcsGate(cfg.roster, cfg.system, cfg.component) if cfg.roster is not None else None
         self.server = server_class(cfg.system, cfg.component, cfg.behaviour)
         self.server.home = home_item(cfg.home)
-        self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed)
+        self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed,
+                                battery=cfg.battery)
         self.frames_received = 0
         self.events: list[str] = []   # human-readable log of plan changes, for the CLI
         self._seen = self._plan_state()
@@ -112,7 +119,10 @@ class VehicleNode:
         if cfg.handover is not None and self.control is None:
             raise ValueError("VehicleConfig.handover needs VehicleConfig.control: the mission computer "
                              "hands control over through the system manager")
-        self.mission_computer = (MissionComputer(cfg.system, cfg.component, cfg.handover)
+        if cfg.handover is not None and cfg.handover.emergency is not None:
+            check_loss_timeout(cfg.handover.emergency, cfg.control)
+        # mission_computer_class: the conformance mutants plug a broken mission computer in here
+        self.mission_computer = (mission_computer_class(cfg.system, cfg.component, cfg.handover)
                                  if cfg.handover is not None else None)
         self.handover_events: deque[Any] = deque(maxlen=MAX_CONTROL_EVENTS)
 
@@ -183,6 +193,8 @@ class VehicleNode:
         answers a GCS not in control in their place."""
         control = self.control
         refusal = self.gate.screen(frame) if self.gate is not None else None   # unknown GCSs: before the manager
+        if refusal is None and self.mission_computer is not None:
+            refusal = self.mission_computer.screen(frame)   # the emergency: nobody commands the refuge flight
         if refusal is None:
             self._on_control(control.handle(frame, now), now)
             if self.mission_computer is not None:
@@ -211,6 +223,9 @@ class VehicleNode:
                 self.events.append(f"control: GCS {action.sysid} lost ({silent:.1f} s without its HEARTBEAT)")
                 self.endpoint.send(cm.statustext(_d.MAV_SEVERITY_CRITICAL,
                                                  f"GCS {action.sysid} lost: no GCS in control"))
+                if self.mission_computer is not None:   # the emergency procedure's commander-lost trigger
+                    self._sync_mission_computer(now)      # decided where the vehicle is now
+                    self._on_handover(self.mission_computer.owner_lost(action, now), now)
             else:
                 was = f" (was {action.previous})" if action.previous != action.owner else ""
                 takeover = "allowed" if action.takeover_allowed else "disallowed"
@@ -222,13 +237,14 @@ class VehicleNode:
     def _sync_mission_computer(self, now: float) -> None:
         """Tell the mission computer where the vehicle is and whether it flies (it does not
         read the flight model itself)."""
-        mc = self.mission_computer
-        p = self.flight.where(now)
-        mc.observe(GeoPoint(p.lat, p.lon, p.alt), now)
-        if self.flight.flying and mc.state is McState.ON_LOAD:
+        mc, flight = self.mission_computer, self.flight
+        p = flight.where(now)
+        battery = flight.battery_at(now)
+        mc.observe(GeoPoint(p.lat, p.lon, p.alt), now, None if battery is None else (battery, flight.battery.model))
+        if flight.flying and mc.state is McState.ON_LOAD:
             mc.start(now, mission_waypoints(self.server.store.items(MissionType.MISSION)))
-        elif not self.flight.flying and mc.state is not McState.ON_LOAD:
-            mc.stop(now)
+        elif not flight.flying and mc.state is not McState.ON_LOAD:
+            self._on_handover(mc.stop(now), now)
 
     def _on_handover(self, actions: list[Any], now: float) -> None:
         """Send the mission computer's messages (invitations, connect notices, STATUSTEXT),
@@ -236,6 +252,9 @@ class VehicleNode:
         for action in self.endpoint.send_all(actions):
             if isinstance(action, WithdrawTakeover):
                 self._on_control(self.control.withdraw(action.requester, now), now)
+                continue
+            if isinstance(action, RevokeControl):
+                self._on_control(revoke_owner(self.control, action.reason, now), now)
                 continue
             self.handover_events.append(action)
             if isinstance(action, HandoverStarted):
@@ -246,6 +265,12 @@ class VehicleNode:
                 detail = f": {r.detail}" if r.detail else ""
                 self.events.append(f"handover: GCS {r.commander} -> GCS {r.partner} {r.outcome.value} "
                                    f"after {r.duration:.2f} s, gcs_main {r.owner}{detail}")
+            elif isinstance(action, EmergencyStarted):
+                target = action.refuge.point
+                self.flight.divert(Position(float(target.lat), float(target.lon), self.config.home.alt), now)
+                self.events.append(f"emergency: {action.trigger.reason}; {action.refuge.reason}")
+            elif isinstance(action, EmergencyEnded):
+                self.events.append(f"emergency over: {action.how}")
 
     # --- internals ------------------------------------------------------------------------
     def _plan_state(self) -> tuple:

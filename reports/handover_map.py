@@ -28,7 +28,7 @@ from typing import NamedTuple, Sequence
 
 from mavconform.reference_impl.handover.geo import EARTH_MEAN_RADIUS_M, GeoPoint, destination
 from mavconform.reference_impl.handover.regions import Circle, Polygon, RegionMethod
-from mavconform.reference_impl.handover.scenario import Scenario
+from mavconform.reference_impl.handover.scenario import Scenario, seq_ranges
 
 __all__ = ["GCS_COLOURS", "NO_OWNER_COLOUR", "Mark", "TrackSample", "handover_map", "owner_colours"]
 
@@ -130,19 +130,6 @@ def _nice_length(max_m: float) -> float:
         if step * k <= max_m:
             return step * k
     return k
-
-
-def _seq_ranges(seqs: Sequence[int]) -> str:
-    """[0, 1, 2, 5, 7, 8] -> '0-2, 5, 7-8'."""
-    parts: list[str] = []
-    i = 0
-    while i < len(seqs):
-        j = i
-        while j + 1 < len(seqs) and seqs[j + 1] == seqs[j] + 1:
-            j += 1
-        parts.append(str(seqs[i]) if i == j else f"{seqs[i]}-{seqs[j]}")
-        i = j + 1
-    return ", ".join(parts) or "none"
 
 
 def _distance_text(metres: float) -> str:
@@ -373,7 +360,7 @@ def _legend(scenario: Scenario, colours: dict[str | None, str], owners_seen: Seq
             seqs = [seq for seq, owner in ownership.assignments.items() if owner == g.name]
             line(f"GCS {g.name} (sysid {g.sysid})", f'<line x1="{_f(x)}" y1="{_f(row)}" x2="{_f(x + 26)}" '
                                                    f'y2="{_f(row)}" stroke="{c}" stroke-width="3.5"/>')
-            out.append(_text(x + 34, row - 6, f"owns waypoints {_seq_ranges(seqs)}", size=11, fill=MUTED))
+            out.append(_text(x + 34, row - 6, f"owns waypoints {seq_ranges(seqs, '-') or 'none'}", size=11, fill=MUTED))
             row += 12
     out.append(_text(x, row, "area: coverage; line: in command" if geographic else "line: in command",
                      size=11, fill=MUTED))

@@ -29,15 +29,22 @@ def write_reports(doc: dict[str, Any], directory: str | Path, *,
     check_run(doc)
     texts = {"json": dump_run(doc), "junit": junit_xml(doc), "markdown": markdown_summary(doc),
              "html": html_report(doc, folder=directory)}
+    return write_texts(directory, {kind: (f"{basename}{suffix}", texts[kind]) for kind, suffix in SUFFIXES.items()})
+
+
+def write_texts(directory: str | Path, texts: dict[str, tuple[str, str]]) -> dict[str, Path]:
+    """Write each (file name, text) of `texts` into `directory` (created if missing), all
+    rendered before any is written; the paths by the same keys. A folder or file that cannot
+    be written is a one-line `UsageError`."""
     folder = Path(directory)
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         _fail(f"{directory}: cannot create folder: {error.strerror or error}")
-    paths = {kind: folder / f"{basename}{suffix}" for kind, suffix in SUFFIXES.items()}
+    paths = {kind: folder / name for kind, (name, _) in texts.items()}
     for kind, path in paths.items():
         try:
-            path.write_text(texts[kind], encoding="utf-8", newline="\n")
+            path.write_text(texts[kind][1], encoding="utf-8", newline="\n")
         except OSError as error:
             _fail(f"{path}: cannot write: {error.strerror or error}")
     return paths

@@ -61,6 +61,23 @@ def test_flight_reaches_every_item_in_order_and_reports_progress():
     assert haversine_m(HOME[0], HOME[1], end.lat, end.lon) == pytest.approx(300, abs=1)
 
 
+def test_a_hold_is_spent_at_the_waypoint_not_spread_over_the_leg():
+    """NAV_WAYPOINT param1 is the time to stay there: the vehicle flies the leg at its speed,
+    then waits at the waypoint (the position a GCS, or the mission computer, reads)."""
+    net, vehicle, gcs, s = rig()
+    assert s.upload(MissionType.MISSION, [wp(0, 0, alt=0.0), wp(1, 100, alt=0.0, param1=10.0)]).ok
+    start_mission(net, gcs)
+    net.run_until(lambda: 0 in reached(gcs), timeout=60)
+    t0 = net.clock.now()
+    for after, north in ((5.0, 50.0), (10.0, 100.0), (15.0, 100.0)):
+        net.run_until(lambda: False, timeout=t0 + after - net.clock.now())
+        p = vehicle.flight.where(net.clock.now())
+        assert haversine_m(HOME[0], HOME[1], p.lat, p.lon) == pytest.approx(north, abs=1.5), after
+    assert 1 not in reached(gcs)           # still holding at 15 s: reached at 20 s
+    net.run_until(lambda: 1 in reached(gcs), timeout=10)
+    assert net.clock.now() - t0 == pytest.approx(20.0, abs=0.1)
+
+
 def test_set_current_mid_flight_skips_ahead():
     net, vehicle, gcs, s = rig()
     s.upload(MissionType.MISSION, [wp(i, 100 * i) for i in range(5)])

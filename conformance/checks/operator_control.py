@@ -169,17 +169,23 @@ def _start(s: Session) -> tuple[Tester, Tester]:
     in control releases; another GCS in control leaves the clause undecided."""
     _system_manager(s)
     t, t2 = s.t, s.second()
-    ours = {_id(t): t, _id(t2): t2}
+    release_if_ours(t, [t, t2])
+    return t, t2
+
+
+def release_if_ours(t: Tester, ours: list[Tester]) -> None:
+    """A GCS of `ours` that the last CONTROL_STATUS names releases control; another
+    operator's control leaves the clause undecided (the suite never takes it from them)."""
+    by_id = {_id(x): x for x in ours}
     last = _latest_status(t)
     owner = last.msg.gcs_main if last is not None else 0
-    if owner and owner not in ours:
+    if owner and owner not in by_id:
         raise PreconditionFailed(f"GCS {owner} is in control of the target (CONTROL_STATUS gcs_main): the "
                                  "clause needs it uncontrolled, and the suite does not take it from another "
                                  "operator; release it and run again")
     if owner:
-        ours[owner].note(f"the last CONTROL_STATUS names GCS {owner}: it releases control first")
-        _ask(ours[owner], cm.ACTION_RELEASE)
-    return t, t2
+        by_id[owner].note(f"the last CONTROL_STATUS names GCS {owner}: it releases control first")
+        _ask(by_id[owner], cm.ACTION_RELEASE)
 
 
 @contextmanager

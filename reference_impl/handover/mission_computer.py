@@ -2,7 +2,7 @@
 
 Two rules, after h11's `_state.py`:
 - Every change of `state` and of a handover's phase goes through `_move` / `_step`, which
-  consult `MC_TRANSITIONS` / `PHASE_TRANSITIONS`; a move the tables lack is a bug here.
+  consult `MC_TABLE` / `PHASE_TRANSITIONS`; a move the tables lack is a bug here.
 - No I/O, no clock, no flight model: positions come in with their times (`observe`), frames
   and the system manager's `ControlChanged` events with `now`; out go `Send` actions, a
   `WithdrawTakeover` request for the manager, and `HandoverStarted` / `HandoverFinished`.
@@ -30,7 +30,19 @@ Bound. A handover ends within `bound` seconds of its start: not committed by
 or open takeover window (`WithdrawTakeover`), so the old commander keeps control; committed,
 it ends COMPLETED when 5 and 6 are seen, else UNCONFIRMED at `start + bound` (control is not
 taken back: the partner was told it holds control, the commander that it does not).
-Leaving the region before the commit aborts too.
+Leaving the region before the commit aborts too. After an abort at the deadline the vehicle
+refuses the partner's requests for control until it leaves the region (`screen`): the
+commander's allow can still arrive late, and would otherwise hand control over after all.
+
+Emergency (`config.emergency`, emergency_procedure.py; off by default). The system manager's
+owner loss (`owner_lost`) or `outside_grace_s` outside every coverage, while flying, moves
+on_mission / on_handover to on_emergency: a handover under way ends (ABORTED before the commit,
+UNCONFIRMED after), the refuge is chosen with the battery the flight has left, and out go
+`EmergencyStarted` (the vehicle diverts), a STATUSTEXT naming trigger and refuge, and
+`RevokeControl` (CONTROL_STATUS with no owner). While on_emergency no region is watched and
+`screen` refuses every GCS's state-changing message except a control request from a known GCS
+covering the vehicle; its grant (`control_changed`) is TAKEN_BACK (on_mission, every region
+seen afresh, as at the start of a flight); landing at the refuge (`stop`) is LANDED (on_load).
 """
 
 from __future__ import annotations
@@ -47,16 +59,21 @@ from ..state_table import next_state
 from ..wire.dialect import mavlink as _d
 from ..wire.frame import Frame
 from . import control_messages as cm
-from .control_results import ControlChanged
+from .control_results import ControlChanged, OwnerLost, Refusal
+from .emergency_procedure import (BatteryReading, EmergencyConfig, EmergencyEnded, EmergencyStarted, OutsideWatch,
+                                  RevokeControl, announcement, commander_lost, ended_text, refuge_for)
+from .emergency_procedure import screen as emergency_screen
+from .emergency import Trigger
 from .geo import GeoPoint
 from .hysteresis import Edge, Latch, Presence, Sense, sense_of, sense_when
-from .mission_computer_transitions import (COMMITTED, MC_TRANSITIONS, PHASE_STEP, PHASE_TRANSITIONS,
+from .mission_computer_transitions import (COMMITTED, MC_TABLE, PHASE_STEP, PHASE_TRANSITIONS,
                                            HandoverOutcome, HandoverPhase, McEvent, McState, PhaseEvent)
 from .regions import Circle, Intersection, OwnedWaypoints, Polygon, RegionMethod, WaypointOwnership
 from .waypoints import waypoint_reached
 
-__all__ = ["HandoverFinished", "HandoverResult", "HandoverStarted", "MissionComputer", "MissionComputerConfig",
-           "WithdrawTakeover", "critical_path_budget", "mission_waypoints"]
+__all__ = ["EmergencyConfig", "EmergencyEnded", "EmergencyStarted", "HandoverFinished", "HandoverResult",
+           "HandoverStarted", "MissionComputer", "MissionComputerConfig", "RevokeControl", "WithdrawTakeover",
+           "critical_path_budget", "mission_waypoints"]
 
 THESIS_CHECK_PERIOD = 0.05   # s: "The third task runs each 50 milliseconds" (4.3.2)
 MAX_RESULTS = 1000
@@ -81,6 +98,7 @@ class MissionComputerConfig:
     closing_timeout: float | None = None  # s of the bound kept for steps 5-6 (None: bound / 4)
     resend_period: float = 1.0            # s between resends of the invitation / connect notice
     resends: int = 5                      # resends of each at most
+    emergency: EmergencyConfig | None = None   # the emergency procedure (None: off, as before)
 
     def __post_init__(self) -> None:
         pairs = self.coverages.items() if isinstance(self.coverages, Mapping) else self.coverages
@@ -114,6 +132,8 @@ class MissionComputerConfig:
             raise ValueError(f"closing_timeout {closing!r} must be more than 0 and less than the bound {self.bound!r}")
         if self.resends < 0:
             raise ValueError("resends must be >= 0")
+        if self.emergency is not None and not isinstance(self.emergency, EmergencyConfig):
+            raise TypeError(f"emergency must be an EmergencyConfig or None, got {self.emergency!r}")
 
     @property
     def closing(self) -> float:
@@ -178,7 +198,8 @@ class HandoverFinished:
     result: HandoverResult
 
 
-Action = Send | WithdrawTakeover | HandoverStarted | HandoverFinished
+Action = (Send | WithdrawTakeover | HandoverStarted | HandoverFinished
+          | EmergencyStarted | RevokeControl | EmergencyEnded)
 
 
 def critical_path_budget(manager: Any, client: Any, *, resend_period: float = 1.0, resends: int = 5,
@@ -214,6 +235,7 @@ class _Watch:
     region: Any                     # the Intersection (geographic) or None (waypoints)
     latch: Latch | None = None      # made at the first check after the start
     used: bool = False              # this entry already started a handover
+    barred: int = 0                 # the partner of this entry's handover that was not granted in time
 
     @property
     def name(self) -> str:
@@ -275,6 +297,12 @@ class MissionComputer:
         self.leg_owner: int | None = None
         self._seq_owner = {seq: g for g, cov in config.coverages if isinstance(cov, OwnedWaypoints)
                            for seq in cov.seqs}
+        # the emergency procedure
+        self.emergency: EmergencyStarted | None = None     # the one under way
+        self.emergencies: list[EmergencyStarted] = []       # every one so far (the first MAX_RESULTS)
+        self._battery: BatteryReading | None = None
+        self._launch: GeoPoint | None = None
+        self._outside = OutsideWatch()
 
     # --- inputs ---------------------------------------------------------------------------
     def start(self, now: float, waypoints: Sequence[tuple[int, GeoPoint]] = ()) -> list[Action]:
@@ -287,24 +315,76 @@ class MissionComputer:
         self._watches = self._make_watches()
         self._next_check = now
         self._ending = False
+        self._launch = self._position[0] if self._position is not None else None
+        self._outside = OutsideWatch()
         return []
 
     def stop(self, now: float) -> list[Action]:
-        """The flight ended. A handover under way runs to its end first."""
+        """The flight ended. A handover under way runs to its end first; an emergency ends
+        here: the vehicle landed at its refuge."""
         if self.state is McState.ON_HANDOVER:
             self._ending = True
         elif self.state is McState.ON_MISSION:
             self._end_mission()
+        elif self.state is McState.ON_EMERGENCY:
+            self._move(McEvent.LANDED)
+            self._next_check, self._watches = None, []
+            return self._end_emergency(0, now, "landed at the refuge")
         return []
 
-    def observe(self, point: GeoPoint, at: float) -> None:
-        """The vehicle's position at time `at` (older than the last one: dropped)."""
+    def observe(self, point: GeoPoint, at: float, battery: BatteryReading | None = None) -> None:
+        """The vehicle's position at time `at` (older than the last one: dropped), with the
+        battery left then and its model (None: no battery modelled)."""
         if self._position is None or at >= self._position[1]:
             self._position = (point, at)
+            self._battery = battery
+
+    def owner_lost(self, lost: OwnerLost, now: float) -> list[Action]:
+        """The system manager dropped the silent owner: the commander-lost trigger, while flying."""
+        e = self.config.emergency
+        if e is None or not e.commander_lost or not self._flying:
+            return []
+        trigger = commander_lost(lost, e.policy)
+        if trigger is None:
+            return []
+        self.commander = 0           # the manager has dropped it (its ControlChanged follows)
+        return self._emergency(trigger, now, lost.sysid)
+
+    def screen(self, frame: Frame) -> Refusal | None:
+        """What the vehicle refuses before the system manager sees it: during the emergency,
+        every GCS's state-changing message, and a request for control from a GCS not entitled
+        to take it back (emergency_procedure.screen); otherwise a request for control from the
+        partner of a handover aborted for want of a grant, until the vehicle has left that
+        region (no late message hands it over: the commander's allow may still arrive after
+        the abort, from a slow operator or a request that was itself late). None otherwise."""
+        if self.state is McState.ON_EMERGENCY:
+            return emergency_screen(frame, self.system, self.component, self.may_take_back)
+        msg, src = frame.msg, frame.source
+        if (not cm.is_request_control(msg) or msg.param1 != cm.ACTION_REQUEST or src[0] == self.commander
+                or not cm.addressed_to(msg, self.system, self.component)):
+            return None
+        w = next((w for w in self._watches if w.barred == src[0] and w.used), None)
+        if w is None:
+            return None
+        ack = cm.command_ack(msg.command, _d.MAV_RESULT_TEMPORARILY_REJECTED, src)
+        return Refusal(f"GCS {src[0]}'s handover in region {w.name} was aborted: not before the vehicle leaves it",
+                       (Send(ack, src),))
+
+    def may_take_back(self, sysid: int) -> bool:
+        """Whether GCS `sysid` may take control during the emergency: takeback is on, the GCS
+        has coverage in the mission, and (geographic methods) that coverage holds the vehicle."""
+        e = self.config.emergency
+        if e is None or not e.takeback or sysid not in self.config.gcs_ids:
+            return False
+        if self.config.method is RegionMethod.WAYPOINTS:
+            return True
+        return self._position is not None and self.config.coverage(sysid).contains(self._position[0])
 
     def control_changed(self, change: ControlChanged, now: float) -> list[Action]:
         """The system manager changed gcs_main or the takeover flag (its CONTROL_STATUS)."""
         previous, self.commander = self.commander, change.owner
+        if self.state is McState.ON_EMERGENCY:
+            return self._taken_back(now) if change.owner else []
         a = self.attempt
         if a is None:
             if change.owner != previous:
@@ -356,6 +436,7 @@ class MissionComputer:
         a = self.attempt
         if a is not None:
             if not a.committed and now >= a.commit_by:
+                a.watch.barred = a.partner
                 out += self._finish(HandoverOutcome.ABORTED, now,
                                     f"control not granted to GCS {a.partner} within {self.config.commit_timeout:g} s")
             elif a.committed and now >= a.end_by:
@@ -370,6 +451,11 @@ class MissionComputer:
             self._next_check = now + self.config.check_period
             out += self._check(now)
         return out
+
+    @property
+    def _flying(self) -> bool:
+        """In the air with a mission (not landed, not waiting for a handover to end after it)."""
+        return self.state in (McState.ON_MISSION, McState.ON_HANDOVER) and not self._ending
 
     def next_deadline(self) -> float | None:
         times = [self._next_check]
@@ -401,6 +487,12 @@ class MissionComputer:
         if self._waypoints:
             self._reach(point)
         out: list[Action] = []
+        e = self.config.emergency
+        if e is not None and e.outside and self.config.method is not RegionMethod.WAYPOINTS and self._flying:
+            self._outside.observe((c for _, c in self.config.coverages), point, at)
+            trigger = self._outside.due(now, e.policy)
+            if trigger is not None:
+                return self._emergency(trigger, now, self.commander)
         for w in self._watches:
             sense = self._sense(w, point)
             if w.latch is None:
@@ -411,7 +503,7 @@ class MissionComputer:
                 w.used = inside
                 continue
             if w.latch.observe(sense, at) is Edge.EXITED:
-                w.used = False
+                w.used, w.barred = False, 0
                 a = self.attempt
                 if a is not None and a.watch is w and not a.committed:
                     out += self._finish(HandoverOutcome.ABORTED, now, f"left region {w.name} before the grant")
@@ -485,12 +577,16 @@ class MissionComputer:
             return self._finish(HandoverOutcome.COMPLETED, now)
         return []
 
-    def _finish(self, outcome: HandoverOutcome, now: float, detail: str = "") -> list[Action]:
+    def _finish(self, outcome: HandoverOutcome, now: float, detail: str = "", *,
+                event: McEvent | None = None) -> list[Action]:
+        """End the handover under way with `outcome`; the mission computer moves by `event`
+        (default: the outcome's own, back to on_mission)."""
         a = self.attempt
         assert a is not None
         self.attempt = None
-        self._move({HandoverOutcome.COMPLETED: McEvent.COMPLETED, HandoverOutcome.UNCONFIRMED: McEvent.UNCONFIRMED,
-                    HandoverOutcome.ABORTED: McEvent.ABORTED}[outcome])
+        self._move(event or {HandoverOutcome.COMPLETED: McEvent.COMPLETED,
+                             HandoverOutcome.UNCONFIRMED: McEvent.UNCONFIRMED,
+                             HandoverOutcome.ABORTED: McEvent.ABORTED}[outcome])
         result = HandoverResult(outcome, a.commander, a.partner, self.commander, a.started, now,
                                 tuple(sorted(a.steps.items())), detail)
         if len(self.results) < MAX_RESULTS:
@@ -501,11 +597,53 @@ class MissionComputer:
         severity = _d.MAV_SEVERITY_INFO if outcome is HandoverOutcome.COMPLETED else _d.MAV_SEVERITY_WARNING
         out += [HandoverFinished(result),
                 Send(cm.statustext(severity, f"Handover {a.commander}->{a.partner} {outcome.value}"))]
+        if event is not None:
+            return out
         if self._ending:
             self._end_mission()
         else:
             out += self._maybe_start(now)
         return out
+
+    # --- the emergency procedure ------------------------------------------------------------
+    def _emergency(self, trigger: Trigger, now: float, commander: int) -> list[Action]:
+        """A trigger fired while flying: end any handover, choose the refuge, announce, divert,
+        drop control."""
+        e = self.config.emergency
+        assert e is not None and self._position is not None
+        out: list[Action] = []
+        why = f"emergency: {trigger.kind.value}"
+        if self.attempt is not None:
+            outcome = HandoverOutcome.UNCONFIRMED if self.attempt.committed else HandoverOutcome.ABORTED
+            out += self._finish(outcome, now, why, event=McEvent.EMERGENCY)
+        else:
+            self._move(McEvent.EMERGENCY)
+        point = self._position[0]
+        home = e.home or self._launch or point
+        refuge = refuge_for(point, home, e.rally, self._battery)
+        started = EmergencyStarted(trigger, refuge, commander, point,
+                                   None if self._battery is None else self._battery[0].remaining_wh, now)
+        self.emergency = started
+        if len(self.emergencies) < MAX_RESULTS:
+            self.emergencies.append(started)
+        self._next_check = None                  # no region is watched during the emergency
+        return out + [started, announcement(trigger, refuge, commander),
+                      RevokeControl(f"{why}: {trigger.reason}; {refuge.reason}")]
+
+    def _taken_back(self, now: float) -> list[Action]:
+        """A known GCS covering the vehicle was granted control: back to on_mission, every
+        region seen afresh (one the vehicle is in now was not entered), the refuge flight on."""
+        self._move(McEvent.TAKEN_BACK)
+        for w in self._watches:
+            w.latch, w.used, w.barred = None, False, 0
+        self._outside = OutsideWatch()
+        self._next_check = now
+        return self._end_emergency(self.commander, now, f"GCS {self.commander} took control back")
+
+    def _end_emergency(self, owner: int, now: float, how: str) -> list[Action]:
+        self.emergency = None
+        ended = EmergencyEnded(owner, now, how)
+        return [ended, ended_text(ended)]
 
     def _end_mission(self) -> None:
         self._move(McEvent.MISSION_ENDED)
@@ -516,7 +654,7 @@ class MissionComputer:
     # --- bookkeeping ----------------------------------------------------------------------
     def _move(self, event: McEvent) -> None:
         old = self.state
-        self.state = next_state(MC_TRANSITIONS, old, event, "mission computer")
+        self.state = next_state(MC_TABLE, old, event, "mission computer")
         self._record_move(old, event, self.state)
 
     def _latch_moved(self, old: Presence, event: Any, new: Presence) -> None:

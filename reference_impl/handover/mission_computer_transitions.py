@@ -1,10 +1,15 @@
 """Transition tables of the mission computer: state -> event -> new state, as data (seed 003, ch. 4).
 
-Two tables. `MC_TRANSITIONS` is the thesis's three states (4.3: on_load, on_mission,
-on_handover). `PHASE_TRANSITIONS` is the progress of one handover through the six steps of
-4.5, as the vehicle observes them over MAVLink operator control (docs/handover.md has the
-mapping). The engine moves only through these tables; `render_markdown` draws them for the
-docs, and a test keeps docs/handover.md equal to it.
+Three tables. `MC_TRANSITIONS` is the thesis's three states (4.3: on_load, on_mission,
+on_handover). `EMERGENCY_TRANSITIONS` adds the fourth, `on_emergency`, which the thesis leaves
+to future work (4.7: "RTL or the nearest rally point"; emergency_procedure.py): entered from a
+flight, left only by landing at the refuge or by a known GCS taking control back. The mission
+computer moves through `MC_TABLE`, the two together; they are kept apart so a test can walk
+each (a normal flight takes every move of the first and none of the second).
+`PHASE_TRANSITIONS` is the progress of one handover through the six steps of 4.5, as the
+vehicle observes them over MAVLink operator control (docs/handover.md has the mapping). The
+engine moves only through these tables; `render_markdown` draws them for the docs, and a test
+keeps docs/handover.md equal to it.
 
 The phase table is total over the observations: under loss, duplication and reordering a
 step may be seen twice, late, or after a later one, and such an observation leaves the phase
@@ -22,6 +27,7 @@ class McState(Enum):
     ON_LOAD = "on_load"          # waiting for the mission to start (4.3.1)
     ON_MISSION = "on_mission"    # flying; the region check runs every check period (4.3.2)
     ON_HANDOVER = "on_handover"  # the handover sequence toward one partner runs (4.3.3)
+    ON_EMERGENCY = "on_emergency"  # flying to the refuge, no GCS in control (4.7)
 
 
 class McEvent(Enum):
@@ -32,6 +38,10 @@ class McEvent(Enum):
     COMPLETED = "all six steps observed within the bound"
     UNCONFIRMED = "control moved to the partner, but step 5 or 6 was not seen within the bound"
     ABORTED = "control did not move to the partner in time, or the region was left first"
+    EMERGENCY = ("a trigger fired (commander lost; outside every coverage past the grace): refuge chosen, "
+                 "control dropped")
+    TAKEN_BACK = "a known GCS whose coverage holds the vehicle was granted control (the refuge flight goes on)"
+    LANDED = "the vehicle landed at the refuge (the flight ended)"
 
 
 _S, _E = McState, McEvent
@@ -46,6 +56,18 @@ MC_TRANSITIONS: dict[tuple[McState, McEvent], McState] = {
     (_S.ON_HANDOVER, _E.UNCONFIRMED): _S.ON_MISSION,
     (_S.ON_HANDOVER, _E.ABORTED): _S.ON_MISSION,
 }
+
+# The emergency procedure (4.7). No GCS command leaves on_emergency: the vehicle refuses every
+# state-changing command while in it; only a control request from a known GCS whose coverage
+# holds the vehicle gets through (docs/handover.md, "Emergency procedure").
+EMERGENCY_TRANSITIONS: dict[tuple[McState, McEvent], McState] = {
+    (_S.ON_MISSION, _E.EMERGENCY): _S.ON_EMERGENCY,
+    # a handover under way ends first (its result says why), in the same step
+    (_S.ON_HANDOVER, _E.EMERGENCY): _S.ON_EMERGENCY,
+    (_S.ON_EMERGENCY, _E.TAKEN_BACK): _S.ON_MISSION,
+    (_S.ON_EMERGENCY, _E.LANDED): _S.ON_LOAD,
+}
+MC_TABLE: dict[tuple[McState, McEvent], McState] = {**MC_TRANSITIONS, **EMERGENCY_TRANSITIONS}
 
 
 class HandoverPhase(Enum):
@@ -108,7 +130,7 @@ class HandoverOutcome(Enum):
 def render_markdown() -> str:
     """Both tables as Markdown (docs/handover.md includes exactly this text)."""
     lines = ["| state | event | new state |", "|---|---|---|"]
-    for (s, e), n in MC_TRANSITIONS.items():
+    for (s, e), n in MC_TABLE.items():
         lines.append(f"| `{s.value}` | {e.name} ({e.value}) | `{n.value}` |")
     lines += ["", "| phase | event | new phase |", "|---|---|---|"]
     for (p, e), n in PHASE_TRANSITIONS.items():

@@ -20,7 +20,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, NoReturn
+from typing import Any, Mapping, NoReturn, Sequence
 
 from ..errors import UsageError
 from ..net.faults import FaultModel, parse_drop_rule
@@ -185,6 +185,24 @@ class Scenario:
 
 
 # --- reading -------------------------------------------------------------------------------
+
+def shipped_scenarios() -> dict[str, Path]:
+    """The scenarios shipped in the package, by name: delivery_flight_circles.json is
+    `delivery-flight-circles`."""
+    return {p.stem.replace("_", "-"): p for p in sorted(SCENARIOS_DIR.glob("*.json"))}
+
+
+def scenario_path(text: str) -> Path:
+    """A scenario as a user names it: a file, else the name of a shipped one (a file wins,
+    but a folder of that name, such as a checkout's `conformance/`, does not)."""
+    path = Path(text)
+    if path.is_file():
+        return path
+    shipped = shipped_scenarios()
+    if text in shipped:
+        return shipped[text]
+    raise ScenarioError(f"{text}: no such scenario file (shipped scenarios: {', '.join(shipped)})")
+
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read and check a scenario file (.json, or .yaml/.yml with PyYAML); a .plan it names is
@@ -556,7 +574,7 @@ def _check_geography(s: Scenario) -> None:
         for seq in sorted(owned.seqs):
             if seq not in seqs:
                 _fail(f"gcs[{i}].coverage.waypoints", f"no waypoint {seq} in the flight "
-                                                      f"(its seqs: {_ranges(sorted(seqs))})")
+                                                      f"(its seqs: {seq_ranges(sorted(seqs))})")
             if seq in owners:
                 _fail(f"gcs[{i}].coverage.waypoints", f"waypoint {seq} is also owned by {owners[seq]!r}")
             owners[seq] = g.name
@@ -565,15 +583,15 @@ def _check_geography(s: Scenario) -> None:
         _fail(where, f"the first waypoint ({first.seq}) belongs to {owner!r}, not to the parent GCS {s.parent!r}")
 
 
-def _ranges(seqs: list[int]) -> str:
-    """[0, 1, 2, 5, 7, 8] -> '0..2, 5, 7..8'."""
+def seq_ranges(seqs: Sequence[int], dash: str = "..") -> str:
+    """[0, 1, 2, 5, 7, 8] -> '0..2, 5, 7..8' (sorted seqs)."""
     parts: list[str] = []
     i = 0
     while i < len(seqs):
         j = i
         while j + 1 < len(seqs) and seqs[j + 1] == seqs[j] + 1:
             j += 1
-        parts.append(str(seqs[i]) if i == j else f"{seqs[i]}..{seqs[j]}")
+        parts.append(str(seqs[i]) if i == j else f"{seqs[i]}{dash}{seqs[j]}")
         i = j + 1
     return ", ".join(parts)
 

@@ -16,14 +16,14 @@ from mavconform.conformance.mutants import MUTANTS
 from mavconform.conformance.outcome import Outcome
 from mavconform.conformance.runner import run_clauses
 from mavconform.conformance.session import Session, build_vehicle
-from mavconform.conformance.target_uri import SUITE_CONTROL, parse_target
+from mavconform.conformance.target_uri import SUITE_CONTROL, parse_target, suite_handover
 from mavconform.reference_impl.handover import control_messages as cm
 from mavconform.reference_impl.handover.control_manager import ControlManager
 from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from ..vehicle_process import vehicle_process
 
-HO = catalogue.select("HO.*")
+HO = catalogue.select("HO.CTL.*")
 HO_IDS = [c.id for c in HO]
 
 
@@ -58,11 +58,12 @@ def test_a_target_without_a_system_manager_is_not_applicable(uri: str) -> None:
 
 
 def test_the_suite_turns_control_on_for_builtin_spec_only_and_the_fuzzers_never() -> None:
-    assert parse_target("builtin:spec").suite_overrides() == {"control": SUITE_CONTROL}
+    assert parse_target("builtin:spec").suite_overrides() == {"control": SUITE_CONTROL, "handover": suite_handover()}
     assert SUITE_CONTROL.open_when_unowned
     for uri in ("builtin:px4", "builtin:ardupilot", "mutant:no-final-ack"):
         assert parse_target(uri).suite_overrides() == {}
-    assert build_vehicle(parse_target("builtin:spec")).control is None   # as the fuzzers build it
+    fuzzed = build_vehicle(parse_target("builtin:spec"))   # as the fuzzers build it
+    assert fuzzed.control is None and fuzzed.mission_computer is None
 
 
 class _NoRequests(ControlManager):
@@ -138,7 +139,7 @@ def test_ho_clauses_against_a_vehicle_process_with_operator_control(tmp_path, ca
     builtin's is open), and the second GCS shares the first one's socket, as for any
     external target. Every clause passes and the target is left as it was found."""
     with vehicle_process("--operator-control") as port:
-        code, doc = _run_cli(capsys, tmp_path, "--target", f"udp:127.0.0.1:{port}", "--clauses", "HO.*")
+        code, doc = _run_cli(capsys, tmp_path, "--target", f"udp:127.0.0.1:{port}", "--clauses", "HO.CTL.*")
     outcomes = {c["id"]: (c["outcome"], c["detail"]) for c in doc["clauses"]}
     assert code == 0 and {k: v for k, v in outcomes.items() if v[0] != "pass"} == {}
     assert list(outcomes) == HO_IDS

@@ -48,7 +48,8 @@ def sample_route(scenario, step_m: float = 10.0) -> list[GeoPoint]:
 
 def test_the_examples_are_package_data() -> None:
     folder = resources.files("mavconform.reference_impl.handover") / "scenarios"
-    assert sorted(p.name for p in folder.iterdir() if p.name.endswith(".json")) == sorted(SHIPPED)
+    # and conformance.json: the conformance suite's handover clauses' default (HO.SEQ.*)
+    assert sorted(p.name for p in folder.iterdir() if p.name.endswith(".json")) == sorted(SHIPPED + ("conformance.json",))
 
 
 @pytest.mark.parametrize("name, method", list(zip(SHIPPED, (RegionMethod.POLYGON, RegionMethod.CIRCLE,
@@ -366,3 +367,16 @@ def test_circles_of_the_example_are_the_gcs_sites() -> None:
     assert isinstance(a, Circle) and isinstance(b, Circle)
     assert a.center == GeoPoint(s.home.lat, s.home.lon) and a.radius_m == b.radius_m == 1800.0
     assert haversine_m(a.center, b.center) < a.radius_m + b.radius_m                          # they overlap
+
+
+def test_a_shipped_scenario_is_found_by_name_and_a_folder_of_that_name_does_not_hide_it(tmp_path, monkeypatch):
+    """From a checkout's root, `conformance` is also a folder: the name still means the
+    shipped scenario; a file of that name would win."""
+    from mavconform.reference_impl.handover.scenario import ScenarioError, scenario_path, shipped_scenarios
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "conformance").mkdir()
+    assert scenario_path("conformance") == shipped_scenarios()["conformance"]
+    (tmp_path / "mine.json").write_text("{}")
+    assert scenario_path("mine.json") == Path("mine.json")
+    with pytest.raises(ScenarioError, match=r"^nope: no such scenario file \(shipped scenarios: conformance, "):
+        scenario_path("nope")
