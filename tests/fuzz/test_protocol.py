@@ -221,3 +221,21 @@ def test_the_fuzzer_finds_the_crash_arducopter_sitl_had():
             break
     assert crash and "param1" in crash[0].violation.detail
     assert replay(crash[0]).invariant == "target-crash"
+
+
+def test_a_slow_machine_finds_the_same_cases_for_the_same_seed(non_atomic_findings, monkeypatch):
+    """Hypothesis stops hunting for more bugs 10 s of wall time after the first; a loaded CI
+    machine used to cross that and find other cases. Wall time jumping 30 s at every look
+    must change nothing in virtual time."""
+    import time as time_module
+    real = time_module.monotonic
+    jumps = [0.0]
+
+    def slow() -> float:
+        jumps[0] += 30.0
+        return real() + jumps[0]
+    monkeypatch.setattr(time_module, "monotonic", slow)
+    again = search("mutant:non-atomic-upload", **SEARCH)
+    monkeypatch.undo()
+    assert _same([(c.seed, c.steps, c.violation.__dict__) for c in again],
+                 [(c.seed, c.steps, c.violation.__dict__) for c in non_atomic_findings])
