@@ -11,8 +11,9 @@
   (upstream development.xml as gomavlib generated it): independent of our XML too, so a
   message or field gomavlib's dialect lacks, or a CRC_EXTRA it computes otherwise, is
   listed by name before any vector is judged.
-Each must decode every valid vector to the same header and fields, re-encode it to the same
-bytes, and refuse every invalid one with its expected error; a mismatch
+Each must decode every valid vector (the message vectors and every frame of every exchange
+transcript) to the same header and fields, re-encode it to the same bytes, and refuse every
+invalid one with its expected error; a mismatch
 `vectors/known_deviations.toml` lists is known, any other fails (exit 1). A missing toolchain
 fails with the reason (exit 1), it is never skipped. Prints build and verify times.
 """
@@ -195,6 +196,23 @@ def crosscheck(implementation: str, vectors: list[dict[str, Any]], dialect: Any,
     return Outcome(implementation, built.seconds, seconds, results, lacks)
 
 
+def exchange_vectors(vset: Any) -> list[dict[str, Any]]:
+    """Every frame of every exchange transcript as a valid vector (`EXCHANGE#N`): the
+    implementations must decode and re-encode what the reference GCS and vehicles really
+    sent, not only the message vectors."""
+    from mavconform.vectors import store
+    out = []
+    for exchange_id, path in sorted(vset.exchanges.items()):
+        for n, event in enumerate(store.read_transcript(path)["events"]):
+            if event["msg"] == "DECODE_ERROR":
+                continue
+            out.append({"id": f"{exchange_id}#{n}", "signed": False, "signature": None, "hex": event["hex"],
+                        "expected_error": None, "msgid": event["msgid"], "message": event["msg"],
+                        "fields": event["fields"], "version": event["version"],
+                        "header": {"sysid": event["sysid"], "compid": event["compid"], "seq": event["seq"]}})
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     from mavconform.reference_impl.errors import UsageError
     from mavconform.vectors import deviations, store, verify
@@ -216,18 +234,21 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"vectors_crosscheck: error: {exc}", file=sys.stderr)
         return 2
+    frames = exchange_vectors(vset)
+    vectors = vset.messages + frames
+    print(f"{len(vset.messages)} message vectors and {len(frames)} frames of {len(vset.exchanges)} exchanges")
     failed = False
     with tempfile.TemporaryDirectory() as tmp:
         for impl in chosen:
             work = Path(args.work) / impl if args.work else Path(tmp) / impl
             work.mkdir(parents=True, exist_ok=True)
             try:
-                outcome = crosscheck(impl, vset.messages, dialect, vset.index["test_key"]["hex"], work)
+                outcome = crosscheck(impl, vectors, dialect, vset.index["test_key"]["hex"], work)
             except ToolchainMissing as exc:
                 print(f"FAIL {impl}: toolchain missing: {exc}")
                 failed = True
                 continue
-            report = verify.check(impl, vset.messages, outcome.results, dialect)
+            report = verify.check(impl, vectors, outcome.results, dialect)
             sorted_ = deviations.sort(report, known)
             print(f"{impl}: {NAMES[impl]}: built in {outcome.build_seconds:.1f} s, verified {report.checked} "
                   f"vectors in {outcome.verify_seconds:.3f} s")

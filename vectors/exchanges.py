@@ -11,9 +11,11 @@ upload before a download) is part of the exchange, so a transcript replays from 
 
 Same seed, same bytes: nothing reads the real clock or a global RNG (SimNetwork's design).
 
-HANDOVER: the authority handover between two GCSs (reference_impl/handover, another
-helper's work in progress) is not recorded yet; `handover_scenarios()` below is the hook and
-says what adding it takes. Until then the list is empty and index.json says so.
+HANDOVER: the authority handover between two GCSs and the vehicle (`handover_scenarios()`,
+`run_handover()`): a shipped handover scenario flown by reference_impl/handover/scenario_run.py
+`run_scenario` (its fleet: the scenario's vehicle, one GCS per scenario GCS), each link 10 ms
+one way, recorded with the same hook. The first GCS of the scenario is "gcs", the second
+"gcs2" (transcript and MCAP channels alike); the files go to exchanges/handover/.
 """
 
 from __future__ import annotations
@@ -26,6 +28,10 @@ from typing import Any, Callable
 from mavconform.conformance.session import build_vehicle
 from mavconform.conformance.target_uri import parse_target
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
+from mavconform.reference_impl.handover.scenario import Scenario as HandoverScenarioFile
+from mavconform.reference_impl.handover.scenario import load_scenario, shipped_scenarios
+from mavconform.reference_impl.handover.scenario_fleet import gcs_address, gcs_config, vehicle_config
+from mavconform.reference_impl.handover.scenario_run import ScenarioRun, run_scenario
 from mavconform.reference_impl.interop.harness import sample_plan
 from mavconform.reference_impl.interop.mocklink import ITEMS, FailureMode, MockLinkVehicle
 from mavconform.reference_impl.mission.items import MissionType
@@ -42,6 +48,8 @@ from .fields import message_fields
 FORMAT = "mavconform-exchange/1"
 PROFILES = ("spec", "px4", "ardupilot")
 GCS, VEHICLE = "gcs", "vehicle"
+GCS2 = "gcs2"            # a handover exchange's second GCS
+HANDOVER = "handover"    # the "profile" (folder) of the handover exchanges
 LATENCY = 0.01           # s, one way, both directions
 RESULT_BOUND = 120.0     # virtual s an operation may take before the scenario is broken
 SETTLE_BOUND = 30.0      # virtual s for both ends to be idle and the link empty afterwards
@@ -228,15 +236,124 @@ def scenarios() -> tuple[Scenario, ...]:
     return tuple(out)
 
 
-def handover_scenarios() -> tuple[Scenario, ...]:
-    """TODO(handover): the authority handover exchanges (two GCSs, operator control, the
-    mission computer), once reference_impl/handover has its scenario runner. To add one:
-    give `Scenario` the `VehicleConfig` overrides it needs (`control`, `handover`) and pass
-    them to `build_vehicle` in `run()`; add a second `GcsNode` at address "gcs2" there
-    (the recorder already records every link; add "gcs2" to the `from`/`to` enums in
-    schemas.py); list the scenario here; and let `replay` send both GCSs' sides. Empty until
-    then, and index.json's "handover" says "none yet", so the gap is visible, not silent."""
-    return ()
+@dataclass(frozen=True)
+class HandoverScenario:
+    """A handover exchange: a shipped handover scenario (reference_impl/handover/scenarios),
+    with `links` adjusting each GCS's link faults (by GCS name: (up, down) `LinkFaults` ->
+    new ones) on top of the 10 ms one way every exchange has."""
+
+    name: str
+    description: str
+    file: str                                   # shipped scenario name (`mavconform handover run NAME`)
+    links: Callable[[str, Any, Any], tuple[Any, Any]] = lambda name, up, down: (up, down)
+    faults_text: tuple[str, ...] = ()
+
+
+def _invitation_lost(name: str, up: Any, down: Any) -> tuple[Any, Any]:
+    """B never hears the vehicle's commands (the invitation and its resends)."""
+    return (up, dataclasses.replace(down, drop=down.drop + ("COMMAND_LONG",))) if name == "B" else (up, down)
+
+
+def handover_scenarios() -> tuple[HandoverScenario, ...]:
+    """The authority handover exchanges: two GCSs (operator control, handover agents) and the
+    scenario's vehicle (system manager, mission computer), the whole flight."""
+    return (
+        HandoverScenario("conformance", "the shipped `conformance` handover scenario: A takes control, uploads "
+                         "the 3-waypoint flight and starts it; the vehicle enters the A+B lens and the mission "
+                         "computer hands control from A to B (COMPLETED); the flight returns home under B",
+                         "conformance"),
+        HandoverScenario("conformance-invitation-lost", "the `conformance` scenario with every COMMAND_LONG from "
+                         "the vehicle to B lost: B never hears the invitation (sent once a second), so the "
+                         "handover is ABORTED when the vehicle leaves the A+B region before any grant, and A "
+                         "keeps control to the end", "conformance", links=_invitation_lost,
+                         faults_text=("vehicle -> gcs2 (B): every COMMAND_LONG lost",)),
+    )
+
+
+def handover_file(hs: HandoverScenario) -> HandoverScenarioFile:
+    """The scenario file as `run_handover` flies it: every link `LATENCY` one way, then `hs.links`."""
+    s = load_scenario(shipped_scenarios()[hs.file])
+    gcs = []
+    for g in s.gcs:
+        up, down = hs.links(g.name, dataclasses.replace(g.up, delay=LATENCY),
+                            dataclasses.replace(g.down, delay=LATENCY))
+        gcs.append(dataclasses.replace(g, up=up, down=down))
+    return dataclasses.replace(s, gcs=tuple(gcs))
+
+
+class _HandoverCapture:
+    """`run_scenario`'s capture hook: every record, its GCS addresses renamed to the
+    transcript's roles, to the recorder and the MCAP capture; markers to the MCAP."""
+
+    def __init__(self, roles: dict[str, str], recorder: "_Recorder", mcap: McapCapture | None) -> None:
+        self.roles, self.recorder, self.mcap = roles, recorder, mcap
+
+    def __call__(self, rec: CaptureRecord) -> None:
+        rec = dataclasses.replace(rec, src=self.roles.get(str(rec.src), rec.src),
+                                  dst=self.roles.get(str(rec.dst), rec.dst))
+        self.recorder(rec)
+        if self.mcap is not None:
+            self.mcap(rec)
+
+    def mark(self, label: str, *, clock: Any, level: str = "info") -> None:
+        if self.mcap is not None:
+            self.mcap.mark(label, clock=clock, level=level)
+
+
+def run_handover(hs: HandoverScenario, dialect: DialectInfo, *, seed: int = 0,
+                 mcap_path: Path | None = None) -> Exchange:
+    """Fly one handover scenario in virtual time (scenario_run.run_scenario, seeded `seed`);
+    the transcript (and the MCAP file)."""
+    s = handover_file(hs)
+    if len(s.gcs) != 2:
+        raise ValueError(f"{hs.name}: a handover exchange has two GCSs, {hs.file} has {len(s.gcs)}")
+    roles = {gcs_address(g): role for g, role in zip(s.gcs, (GCS, GCS2))}
+    events: list[dict[str, Any]] = []
+    capture = McapCapture(mcap_path, compress=False) if mcap_path is not None else None
+    try:
+        run = run_scenario(s, seed=seed, capture=_HandoverCapture(roles, _Recorder(events, dialect), capture))
+    finally:
+        if capture is not None:
+            capture.close()
+    if run.setup_failure is not None or not run.finished:
+        raise RuntimeError(f"{hs.name}: the handover run did not finish ({run.setup_failure or run.stopped_by})")
+    vcfg = vehicle_config(s)
+    peers = {VEHICLE: {"sysid": vcfg.system, "compid": vcfg.component,
+                       "what": f"reference vehicle with the {hs.file} scenario's system manager and mission computer"}}
+    for g, role in zip(s.gcs, (GCS, GCS2)):
+        cfg = gcs_config(s, g)
+        peers[role] = {"sysid": cfg.system, "compid": cfg.component,
+                       "what": f"GCS {g.name}" + (" (parent)" if g.name == s.parent else "")
+                               + ": reference GCS with operator control and a handover agent"}
+    transcript = {
+        "format": FORMAT,
+        "id": f"{HANDOVER}/{hs.name}",
+        "scenario": hs.name,
+        "profile": HANDOVER,
+        "description": hs.description,
+        "seed": seed,
+        "peers": peers,
+        "link": {"latency": LATENCY, "faults": list(hs.faults_text)},
+        "steps": _handover_steps(run),
+        "events": events,
+    }
+    return Exchange(transcript["id"], hs, HANDOVER, transcript)
+
+
+def _handover_steps(run: ScenarioRun) -> list[dict[str, Any]]:
+    """The run's phases as steps: the parent's setup, each handover, the flight."""
+    started = run.mission_started if run.mission_started is not None else 0.0
+    ended = run.flight_ended if run.flight_ended is not None else run.end
+    steps = [{"label": f"setup: {run.scenario.parent} takes control, uploads the flight and starts it",
+              "start": 0.0, "end": _t(started), "result": "ok"}]
+    for h in run.handovers:
+        r = h.result
+        steps.append({"label": f"handover {h.number} {h.commander}->{h.partner} (region {h.region})",
+                      "start": _t(r.started), "end": _t(r.finished),
+                      "result": f"{r.outcome.name}, owner {h.owner_after}" + (f" ({r.detail})" if r.detail else "")})
+    steps.append({"label": "flight", "start": _t(started), "end": _t(ended),
+                  "result": "complete" if run.flight_complete else "not at its last waypoint"})
+    return steps
 
 
 # --- running a scenario ------------------------------------------------------------------
@@ -244,8 +361,8 @@ def handover_scenarios() -> tuple[Scenario, ...]:
 @dataclass
 class Exchange:
     id: str
-    scenario: Scenario
-    profile: str
+    scenario: "Scenario | HandoverScenario"
+    profile: str                  # or HANDOVER
     transcript: dict[str, Any]
 
 

@@ -16,6 +16,9 @@ MISSION_CURRENT's distinct `seq` values are compared apart, in order of first ap
 latency, so replaying an exchange against the profile that recorded it shows no difference
 (a test holds that) and against another profile shows exactly how they differ. `udp:` and
 `udpin:` targets run over real sockets with bounded waits.
+
+Handover exchanges (exchanges/handover/, two GCSs) are not replayed: a UsageError (exit 2)
+says so; their frames are checked by `verify` like every other exchange's.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from typing import Any
 
 from mavconform.conformance.session import build_vehicle
 from mavconform.conformance.target_uri import TargetUri
+from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.mission.messages import is_vehicle_heartbeat
 from mavconform.reference_impl.net import FaultModel, MonotonicClock, SimNetwork, UdpDriver
 from mavconform.reference_impl.net.node import Address
@@ -128,7 +132,11 @@ class ReplayNode:
 
 
 def replay(transcript: dict[str, Any], uri: TargetUri, dialect: DialectInfo, *, scale: float = 1.0) -> ReplayResult:
-    """Send the transcript's GCS side to the target; compare its replies with the vehicle's."""
+    """Send the transcript's GCS side to the target; compare its replies with the vehicle's.
+    A handover exchange (two GCSs) is refused with a UsageError: replay speaks as one GCS."""
+    if "gcs2" in transcript.get("peers", {}):
+        raise UsageError(f"{transcript.get('id')}: a handover exchange has two GCSs (gcs, gcs2) and replay sends "
+                         f"one GCS's side: fly it with `mavconform handover run` instead")
     events = [e for e in transcript["events"] if e.get("msg") != "DECODE_ERROR"]
     vehicle = transcript["peers"]["vehicle"]
     recorded_ids = (vehicle["sysid"], vehicle["compid"])

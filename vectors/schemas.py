@@ -52,8 +52,9 @@ _EVENT = {
     "additionalProperties": False,
     "properties": {
         "t": {"type": "number", "minimum": 0, "description": "virtual seconds since the start, when sent"},
-        "from": {"type": "string", "enum": ["gcs", "vehicle"]},
-        "to": {"type": "string", "enum": ["gcs", "vehicle"]},
+        "from": {"type": "string", "enum": ["gcs", "gcs2", "vehicle"],
+                 "description": "gcs2: a handover exchange's second GCS"},
+        "to": {"type": "string", "enum": ["gcs", "gcs2", "vehicle"]},
         "lost": {"type": "boolean", "description": "the link lost it (a scripted fault): never delivered"},
         "msg": {"type": "string", "description": "message name, or DECODE_ERROR"},
         "msgid": {"type": "integer"},
@@ -69,7 +70,8 @@ EXCHANGE: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "title": "mavconform exchange transcript",
     "description": "A complete exchange between the reference GCS and a reference vehicle in virtual time "
-                   "(exchanges/PROFILE/SCENARIO.json; the same frames are in SCENARIO.mcap).",
+                   "(exchanges/PROFILE/SCENARIO.json; the same frames are in SCENARIO.mcap); a handover "
+                   "exchange (profile 'handover') has two GCSs, 'gcs' and 'gcs2'.",
     "type": "object",
     "required": ["format", "id", "scenario", "profile", "description", "seed", "peers", "link", "steps", "events"],
     "additionalProperties": False,

@@ -6,6 +6,7 @@ Layout of a vectors directory (the package's own is the committed set):
     messages.jsonl                      one message vector per line (schema/message-vector.schema.json)
     exchanges/PROFILE/SCENARIO.json     an exchange transcript (schema/exchange.schema.json)
     exchanges/PROFILE/SCENARIO.mcap     the same frames as an MCAP capture (opens in Foxglove)
+    exchanges/handover/SCENARIO.*       the handover exchanges (two GCSs), likewise
     schema/*.json                       the two JSON Schemas
 Every JSON file is written canonically (sorted keys, no NaN, "\\n" line ends), so the same
 seed gives the same bytes.
@@ -63,11 +64,17 @@ def generate(out: Path, dialect: DialectInfo, *, seed: int = messages.DEFAULT_SE
         for profile in exchanges.PROFILES:
             folder = out / EXCHANGES / profile
             folder.mkdir(parents=True, exist_ok=True)
-            for scenario in exchanges.scenarios() + exchanges.handover_scenarios():
+            for scenario in exchanges.scenarios():
                 ex = exchanges.run(scenario, profile, dialect, seed=seed,
                                    mcap_path=folder / f"{scenario.name}.mcap")
                 write_transcript(folder / f"{scenario.name}.json", ex.transcript)
                 done.append(ex)
+        folder = out / EXCHANGES / exchanges.HANDOVER
+        folder.mkdir(parents=True, exist_ok=True)
+        for hs in exchanges.handover_scenarios():
+            ex = exchanges.run_handover(hs, dialect, seed=seed, mcap_path=folder / f"{hs.name}.mcap")
+            write_transcript(folder / f"{hs.name}.json", ex.transcript)
+            done.append(ex)
     exchange_seconds = time.perf_counter() - t1
     (out / SCHEMA_DIR).mkdir(exist_ok=True)
     for name, schema in SCHEMAS.items():
@@ -79,6 +86,8 @@ def generate(out: Path, dialect: DialectInfo, *, seed: int = messages.DEFAULT_SE
 
 def _index(dialect: DialectInfo, seed: int, vectors: list[dict[str, Any]],
            done: list[exchanges.Exchange]) -> dict[str, Any]:
+    mission = [e for e in done if e.profile != exchanges.HANDOVER]
+    handover = [e for e in done if e.profile == exchanges.HANDOVER]
     errors: dict[str, int] = {}
     for v in vectors:
         if v["expected_error"]:
@@ -98,11 +107,15 @@ def _index(dialect: DialectInfo, seed: int, vectors: list[dict[str, Any]],
                      "invalid": sum(1 for v in vectors if v["expected_error"]), "by_error": errors},
         "exchanges": {
             "count": len(done),
-            "profiles": sorted({e.profile for e in done}, key=exchanges.PROFILES.index),
-            "scenarios": [s.name for s in exchanges.scenarios()] if done else [],
-            "handover": [s.name for s in exchanges.handover_scenarios()] or
-                        "none yet: the handover scenario runner is not in (exchanges.handover_scenarios)",
+            "profiles": sorted({e.profile for e in mission}, key=exchanges.PROFILES.index),
+            "scenarios": [s.name for s in exchanges.scenarios()] if mission else [],
             "frames": sum(len(e.transcript["events"]) for e in done),
+            "handover": {
+                "count": len(handover),
+                "folder": f"{EXCHANGES}/{exchanges.HANDOVER}",
+                "scenarios": [e.scenario.name for e in handover],
+                "frames": sum(len(e.transcript["events"]) for e in handover),
+            },
         },
     }
 

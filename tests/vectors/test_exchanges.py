@@ -22,8 +22,10 @@ def _transcript(committed, ex_id: str) -> dict:
 
 def test_every_scenario_is_recorded_for_every_profile(committed) -> None:
     want = {f"{p}/{s.name}" for p in exchanges.PROFILES for s in exchanges.scenarios()}
+    want |= {f"handover/{s.name}" for s in exchanges.handover_scenarios()}
     assert set(committed.exchanges) == want
-    assert committed.index["exchanges"]["handover"].startswith("none yet")
+    handover = committed.index["exchanges"]["handover"]
+    assert handover["scenarios"] == ["conformance", "conformance-invitation-lost"] and handover["count"] == 2
 
 
 @pytest.mark.parametrize("ex_id, results", [
@@ -80,6 +82,8 @@ def test_the_mcap_file_holds_the_transcripts_frames(committed) -> None:
 def test_replaying_against_the_recording_profile_gives_the_same_replies(committed, dialect) -> None:
     for ex_id, path in committed.exchanges.items():
         profile, scenario = ex_id.split("/")
+        if profile == exchanges.HANDOVER:    # two GCSs: replay refuses them (a test below)
+            continue
         result = replay.replay(store.read_transcript(path), parse_target(f"builtin:{profile}"), dialect)
         if scenario == "out-of-sequence":   # the MockLink rewrite was on the recorded link, not in the vehicle
             assert [(d.fields) for d in result.differences] == [["seq: expected 2, got 1"]], ex_id
@@ -111,3 +115,58 @@ def test_replay_usage_mistakes_are_one_line(capsys) -> None:
     assert len(err) == 1 and "no exchange 'spec/no-such-scenario'" in err[0]
     assert main(["vectors", "replay", "spec/upload-mission", "--target", "nowhere:1"]) == 2
     assert "bad target" in capsys.readouterr().err
+
+
+# --- handover exchanges: two GCSs and the vehicle ------------------------------------------
+
+def test_the_handover_exchange_records_both_gcss_and_the_handover(committed) -> None:
+    transcript = _transcript(committed, "handover/conformance")
+    assert {k: (v["sysid"], v["compid"]) for k, v in transcript["peers"].items()} == {
+        "gcs": (245, 190), "gcs2": (246, 190), "vehicle": (1, 1)}
+    events = transcript["events"]
+    assert {(e["from"], e["to"]) for e in events} == {("gcs", "vehicle"), ("vehicle", "gcs"),
+                                                      ("gcs2", "vehicle"), ("vehicle", "gcs2")}
+    assert [s["result"] for s in transcript["steps"]] == ["ok", "COMPLETED, owner B", "complete"]
+    handover = transcript["steps"][1]
+    # the thesis's exchange, as MAVLink (docs/handover.md): the invitation to B, B's request, its
+    # forward to A, A's allow: all MAV_CMD 32100, inside the handover's span
+    during = [(e["from"], e["to"], e["msg"]) for e in events
+              if handover["start"] <= e["t"] <= handover["end"] and e["msg"] in ("COMMAND_LONG", "COMMAND_ACK")]
+    assert during[:4] == [("vehicle", "gcs2", "COMMAND_LONG"), ("gcs2", "vehicle", "COMMAND_ACK"),
+                          ("gcs2", "vehicle", "COMMAND_LONG"), ("vehicle", "gcs2", "COMMAND_ACK")]
+    assert ("vehicle", "gcs", "COMMAND_LONG") in during and ("gcs", "vehicle", "COMMAND_LONG") in during
+    owners = [e["fields"]["gcs_main"] for e in events if e["msg"] == "CONTROL_STATUS"]
+    assert owners[0] in (0, 245) and owners[-1] == 246 and 245 in owners
+    assert not any(e["lost"] for e in events)
+
+
+def test_the_invitation_lost_variant_aborts_and_a_keeps_control(committed) -> None:
+    transcript = _transcript(committed, "handover/conformance-invitation-lost")
+    steps = [s["result"] for s in transcript["steps"]]
+    assert steps[0] == "ok" and steps[1].startswith("ABORTED, owner A") and steps[2] == "complete"
+    lost = [(e["from"], e["to"], e["msg"]) for e in transcript["events"] if e["lost"]]
+    assert lost and set(lost) == {("vehicle", "gcs2", "COMMAND_LONG")}
+    owners = {e["fields"]["gcs_main"] for e in transcript["events"] if e["msg"] == "CONTROL_STATUS"}
+    assert 246 not in owners
+
+
+def test_the_handover_mcap_holds_the_transcripts_frames(committed) -> None:
+    transcript = _transcript(committed, "handover/conformance")
+    sent, topics, markers = [], set(), []
+    with open(committed.exchanges["handover/conformance"].with_suffix(".mcap"), "rb") as fh:
+        for _, channel, message in make_reader(fh).iter_messages(log_time_order=False):
+            body = json.loads(message.data)
+            if channel.topic == "markers":
+                markers.append(body["message"])
+            else:
+                topics.add(channel.topic)
+                sent.append(body["raw"])
+    assert sorted(sent) == sorted(e["hex"] for e in transcript["events"])
+    assert all("gcs" in t or "vehicle" in t for t in topics) and any("gcs2" in t for t in topics)
+    assert any("handover 1 A->B started" in m for m in markers)
+
+
+def test_replay_refuses_a_handover_exchange_in_one_line(committed, capsys) -> None:
+    assert main(["vectors", "replay", "handover/conformance", "--target", "builtin:spec"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "two GCSs" in err[0] and "mavconform handover run" in err[0]
