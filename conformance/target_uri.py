@@ -24,7 +24,10 @@ HO clauses are not-applicable, as on any target that sends no CONTROL_STATUS or 
 32100 with MAV_RESULT_UNSUPPORTED. Mutants keep the vehicle they declare: the HO mutants
 (mutants/operator_control.py) turn the same `SUITE_CONTROL` on, the others leave it off.
 The fuzzers build their vehicles without these overrides (`session.build_vehicle`).
-`mavconform vehicle --operator-control --open-when-unowned` serves what `builtin:spec` runs.
+`mavconform vehicle --operator-control --open-when-unowned` serves the system manager
+`builtin:spec` runs (the HO.CTL behaviour); `builtin:spec` also runs the mission computer
+loaded from the conformance scenario, which `vehicle --handover conformance` serves with
+that scenario's own owner-loss time and its emergency procedure on.
 
 The handover sequence (the HO.SEQ clauses: the thesis's procedure, seed 003 ch. 4, over
 operator control; docs/handover.md). The tester must know what the target's mission
@@ -55,6 +58,7 @@ from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.handover.control_manager import ManagerConfig
 from mavconform.reference_impl.handover.mission_computer import MissionComputerConfig
 from mavconform.reference_impl.handover.scenario import SCENARIOS_DIR, Scenario, load_scenario, scenario_path
+from mavconform.reference_impl.handover.scenario_fleet import mission_computer_config
 from mavconform.reference_impl.net.uri import (FORMS as UDP_FORMS, SCHEMES as UDP_SCHEMES, UdpUri,
                                                 parse_udp_uri)
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES
@@ -76,13 +80,9 @@ def conformance_scenario() -> Scenario:
 
 
 def handover_config(scenario: Scenario) -> MissionComputerConfig:
-    """The mission computer's load from a scenario, as `mavconform vehicle --handover` loads
-    it (scenario_fleet): the parent, every GCS's coverage by system id, the dwell, the bound,
-    the acceptance radius; the emergency procedure stays off (nothing here judges it)."""
-    return MissionComputerConfig(parent=scenario.gcs_named(scenario.parent).sysid,
-                                 coverages={g.sysid: g.coverage for g in scenario.gcs},
-                                 dwell=scenario.timeouts.dwell_s, bound=scenario.timeouts.handover_bound_s,
-                                 acceptance_radius_m=scenario.flight.acceptance_radius_m)
+    """The mission computer's load from a scenario (scenario_fleet's), with the emergency
+    procedure off: nothing here judges it, and it would take over a clause's flight."""
+    return replace(mission_computer_config(scenario), emergency=None)
 
 
 @lru_cache(maxsize=None)

@@ -36,6 +36,7 @@ from mavconform.reference_impl.mission.items import (
     FRAME_MISSION, GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, PLAN_TYPES, MissionItem,
     MissionType,
 )
+from mavconform.reference_impl.handover import control_messages as cm
 from mavconform.reference_impl.net import FaultModel
 
 # --- valid plans (what the reference vehicle accepts) ------------------------------------
@@ -491,7 +492,7 @@ def stray_step(max_items: int = 20, max_after: float = 4.0, *,
 
 # --- operator control (--operator-control) -----------------------------------------------------------
 
-REQUEST_OPERATOR_CONTROL = 32100   # MAV_CMD_REQUEST_OPERATOR_CONTROL (development.xml)
+REQUEST_OPERATOR_CONTROL = cm.REQUEST_CONTROL   # MAV_CMD_REQUEST_OPERATOR_CONTROL (development.xml)
 CONTROL_ACTIONS = ("request", "release", "allow", "disallow")
 OWNER_ANSWERS = (None, "allow", "release", "refuse")
 FUZZ_GCS_IDS = (245.0, 246.0, 248.0)   # A, B, the mute GCS (fuzz/protocol/world.py)

@@ -112,10 +112,12 @@ def vehicle_for_scenario(scenario: Scenario, base: Any, *, accept_unsigned: bool
     """`base` (the profile's VehicleConfig) with the scenario's system id, home, speed, system
     manager, mission computer and roster; and the lines saying what it runs."""
     own = vehicle_config(scenario)
-    battery = {"battery": own.battery} if hasattr(own, "battery") else {}    # where the flight model has one
+    if accept_unsigned and own.roster is None:
+        raise UsageError(f"--accept-unsigned: the scenario {scenario.source or scenario.name} gives its GCSs no "
+                         "signing keys, so nothing is signed or checked: leave the option out")
     config = dataclasses.replace(base, system=own.system, home=own.home, speed=own.speed, control=own.control,
-                                 handover=own.handover, roster=own.roster,
-                                 require_signature=own.require_signature and not accept_unsigned, **battery)
+                                 handover=own.handover, roster=own.roster, battery=own.battery,
+                                 require_signature=own.require_signature and not accept_unsigned)
     t = scenario.timeouts
     gcss = "; ".join(f"{g.name} system {g.sysid}" + (" (parent)" if g.name == scenario.parent else "")
                      + (f", key {_fingerprint(g.signing.secret)}" if g.signing is not None else ", unsigned")

@@ -155,9 +155,7 @@ class MavlinkEndpoint:
             return
         data = self.encoder.encode(msg)
         if to is not None:
-            address = self.peers.get(to)
-            if address is None and to[1] == 0:
-                address = next((a for p, a in self.peers.items() if p[0] == to[0]), None)
+            address = self._address_of(to)
             if address is not None:
                 self._outbox.append((data, address))
                 return

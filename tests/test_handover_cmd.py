@@ -112,3 +112,11 @@ def test_vehicle_handover_announces_the_scenario_and_serves_the_parent_signed_wi
     assert printed[3].startswith("handover: the flight (9 waypoints, 6.6 km at 12 m/s) is the stored mission")
     assert printed[4].startswith("mission: 9 items stored")
     assert printed[-1] == "control: gcs_main 255 (was 0), takeover disallowed: granted to GCS 255"
+
+
+def test_accept_unsigned_with_a_scenario_that_has_no_keys_is_a_usage_error(capsys) -> None:
+    """The option would change nothing: saying so beats letting a user think signing is on."""
+    assert main(["vehicle", "--handover", "conformance", "--accept-unsigned"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mavconform: error: --accept-unsigned: the scenario ")
+    assert err[0].endswith("gives its GCSs no signing keys, so nothing is signed or checked: leave the option out")

@@ -166,19 +166,34 @@ def load(directory: Path) -> VectorSet:
         with open(path, encoding="utf-8") as fh:
             for n, line in enumerate(fh, 1):
                 try:
-                    vectors.append(json.loads(line))
+                    vector = json.loads(line)
                 except json.JSONDecodeError as exc:
                     raise UsageError(f"{path}:{n}: not JSON ({exc.msg})") from None
+                if not isinstance(vector, dict) or not isinstance(vector.get("id"), str) \
+                        or not isinstance(vector.get("hex"), str):
+                    raise UsageError(f"{path}:{n}: expected a vector object with an id and hex")
+                vectors.append(vector)
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
     found = {f"{p.parent.name}/{p.stem}": p for p in sorted(directory.glob(f"{EXCHANGES}/*/*.json"))}
     return VectorSet(directory, index, vectors, found)
 
 
+TRANSCRIPT_KEYS = {"events": list, "peers": dict, "link": dict, "seed": int, "id": str}
+
+
 def read_transcript(path: Path) -> dict[str, Any]:
+    """A transcript with the keys verify and replay read; a hand-edited one missing one is a
+    one-line UsageError naming the file and the key, not a KeyError."""
     transcript = _read_json(path)
     if transcript.get("format") != exchanges.FORMAT:
         raise UsageError(f"{path}: not a {exchanges.FORMAT} transcript")
+    for key, kind in TRANSCRIPT_KEYS.items():
+        if not isinstance(transcript.get(key), kind):
+            raise UsageError(f"{path}: {key}: expected a JSON {kind.__name__.replace('dict', 'object').replace('list', 'array')}")
+    for n, event in enumerate(transcript["events"]):
+        if not isinstance(event, dict) or not all(k in event for k in ("hex", "msg", "from", "to", "t")):
+            raise UsageError(f"{path}: events[{n}]: expected an object with hex, msg, from, to and t")
     return transcript
 
 

@@ -87,12 +87,12 @@ WIRE_STATUS_GRACE = 0.5  # s after an answer before a CONTROL_STATUS is taken to
 
 @dataclass(frozen=True)
 class ControlRules:
-    """The numbers the judges hold the vehicle to."""
+    """The numbers the judges hold the vehicle to: the system manager's own (`of`)."""
 
-    status_period: float = 1.0
-    owner_loss_timeout: float = 5.0
-    takeover_window: float = cm.TAKEOVER_WINDOW
-    open_when_unowned: bool = True
+    status_period: float
+    owner_loss_timeout: float
+    takeover_window: float
+    open_when_unowned: bool
     answer_bound: float = ANSWER_BOUND
 
     @classmethod

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from mavconform.cli import main
@@ -47,3 +48,20 @@ def test_usage_mistakes_are_one_line_and_exit_2(tmp_path: Path, capsys) -> None:
         err = capsys.readouterr().err.strip().splitlines()
         assert code == 2, argv
         assert len(err) == 1 and err[0].startswith("mavconform: error: ") and words in err[0], (argv, err)
+
+
+def test_a_hand_edited_transcript_or_vector_line_is_one_line_not_a_traceback(tmp_path, capsys) -> None:
+    """verify and replay read the files' keys: a missing one names the file and the key."""
+    import shutil
+    from mavconform.vectors import store
+    copy = tmp_path / "v"
+    shutil.copytree(store.DATA_DIR, copy, ignore=shutil.ignore_patterns("*.py", "__pycache__"))
+    transcript = copy / "exchanges" / "spec" / "upload-mission.json"
+    doc = json.loads(transcript.read_text())
+    del doc["events"][0]["hex"]
+    transcript.write_text(json.dumps(doc))
+    assert main(["vectors", "verify", str(copy)]) == 2
+    assert capsys.readouterr().err.strip().endswith("upload-mission.json: events[0]: expected an object with hex, msg, from, to and t")
+    (copy / "messages.jsonl").write_text('["not", "a", "vector"]\n')
+    assert main(["vectors", "verify", str(copy)]) == 2
+    assert capsys.readouterr().err.strip().endswith("messages.jsonl:1: expected a vector object with an id and hex")
