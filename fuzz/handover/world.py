@@ -31,17 +31,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
-from mavconform.reference_impl.flight import FlightBattery, Position
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
-from mavconform.reference_impl.handover.control_client import ClientConfig, always
-from mavconform.reference_impl.handover.control_manager import ControlManager, ManagerConfig
+from mavconform.reference_impl.handover.control_client import always
+from mavconform.reference_impl.handover.control_manager import ControlManager
 from mavconform.reference_impl.handover.control_results import Decision, TakeoverRequested
-from mavconform.reference_impl.handover.emergency_procedure import EmergencyConfig
 from mavconform.reference_impl.handover.gcs_handover import GcsHandoverConfig, HandoverAgent
-from mavconform.reference_impl.handover.mission_computer import MissionComputer, MissionComputerConfig
+from mavconform.reference_impl.handover.mission_computer import MissionComputer
 from mavconform.reference_impl.handover.scenario import SCENARIOS_DIR, Scenario, load_scenario
+from mavconform.reference_impl.handover.scenario_fleet import (flight_items, gcs_config, mission_computer_config,
+                                                              vehicle_config)
 from mavconform.reference_impl.mission.constants import Cmd
-from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.net import FaultModel, SimNetwork
 from mavconform.reference_impl.session import GcsSession
 from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
@@ -112,29 +112,14 @@ class FlightCase:
 
 def scenario_configs(s: Scenario, *, bound: float | None = None, emergency: bool = True
                      ) -> tuple[VehicleConfig, dict[str, GcsConfig], dict[int, Any]]:
-    """The vehicle and GCS configs a scenario file describes: operator control with the
-    scenario's loss timeout, the mission computer with its coverages, dwell, bound and the
-    emergency procedure (rally points, home, grace), the flight's speed and battery."""
-    coverages = {g.sysid: g.coverage for g in s.gcs}
-    t = s.timeouts
-    policy = s.timeouts.triggers()
-    mc = MissionComputerConfig(
-        parent=s.gcs_named(s.parent).sysid, coverages=coverages, dwell=t.dwell_s,
-        acceptance_radius_m=s.flight.acceptance_radius_m, bound=bound or t.handover_bound_s,
-        emergency=EmergencyConfig(policy, s.rally, s.home, outside=s.geographic) if emergency else None)
-    home = Position(float(s.home.lat), float(s.home.lon), float(s.home.alt or 0.0))
-    vehicle = VehicleConfig(system=s.vehicle_sysid, home=home, speed=s.flight.speed_m_s,
-                            control=ManagerConfig(owner_loss_timeout=t.loss_timeout_s), handover=mc,
-                            battery=FlightBattery(s.battery, s.initial_battery))
-    gcss = {g.name: GcsConfig(system=g.sysid, control=ClientConfig()) for g in s.gcs}
-    return vehicle, gcss, coverages
-
-
-def route(s: Scenario) -> list[MissionItem]:
-    """The scenario's path as NAV_WAYPOINTs (MAV_FRAME_GLOBAL_RELATIVE_ALT: alt above home)."""
-    return [MissionItem(i, 3, int(Cmd.NAV_WAYPOINT), x=round(float(w.point.lat) * 1e7),
-                        y=round(float(w.point.lon) * 1e7), z=float(w.point.alt or 0.0))
-            for i, w in enumerate(s.flight.waypoints)]
+    """The vehicle and GCS configs a scenario file describes, as the scenario runner builds
+    them (scenario_fleet), unsigned: signing is not what these properties are about. `bound`
+    overrides the scenario's handover bound; `emergency=False` turns the procedure off."""
+    base = mission_computer_config(s)
+    mc = replace(base, bound=bound or base.bound, emergency=base.emergency if emergency else None)
+    vehicle = replace(vehicle_config(s), handover=mc, roster=None, require_signature=False)
+    gcss = {g.name: replace(gcs_config(s, g), signing=None) for g in s.gcs}
+    return vehicle, gcss, {g.sysid: g.coverage for g in s.gcs}
 
 
 @dataclass
@@ -210,7 +195,7 @@ def build(case: FlightCase, *, judge_factory: Callable[..., Any],
     if not parent.request_control().ok:
         world.setup_failed = "the parent was not granted control"
         return world
-    if not parent.upload(MissionType.MISSION, route(s)).ok:
+    if not parent.upload(MissionType.MISSION, flight_items(s)).ok:
         world.setup_failed = "the route was not uploaded"
         return world
     gcss[s.parent].send(_d.MAVLink_command_long_message(vcfg.system, vcfg.component, Cmd.MISSION_START,
@@ -248,7 +233,7 @@ def _meddle(world: World, name: str, action: str, seq: int) -> None:
     elif action == "set_current_msg":
         gcs.send(_d.MAVLink_mission_set_current_message(v.system, v.component, seq))
     elif action == "upload" and not gcs.busy:
-        gcs.upload(MissionType.MISSION, route(world.scenario)[:2], now)
+        gcs.upload(MissionType.MISSION, flight_items(world.scenario)[:2], now)
 
 
 def _retake(world: World, name: str) -> None:
