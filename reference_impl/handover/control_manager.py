@@ -64,6 +64,29 @@ SILENT_STATE_CHANGES = frozenset({
     "SET_HOME_POSITION", "SET_GPS_GLOBAL_ORIGIN", "SET_ACTUATOR_CONTROL_TARGET"})
 
 
+def refuse_state_change(msg: Any, src: Peer, who: str, command_result: int, why: str) -> Refusal | None:
+    """The answer to a state-changing message from `src` that may not change state now (`who`
+    says why, for the log), or None for one that moves nothing: commands get COMMAND_ACK
+    `command_result` (telemetry requests and 32100 itself pass), mission writes MISSION_ACK
+    MAV_MISSION_DENIED, a set-current a STATUSTEXT (as the mission protocol reports a refused
+    one, "Set current refused: `why`"), streams such as MANUAL_CONTROL are dropped unanswered."""
+    name = msg._type
+    if name in ("COMMAND_LONG", "COMMAND_INT"):
+        if msg.command in FREE_COMMANDS:
+            return None
+        ack = cm.command_ack(msg.command, command_result, src)
+        return Refusal(f"{name} {msg.command}: {who}", (Send(ack, src),))
+    if name in MISSION_WRITES:
+        ack = cm.mission_ack(_d.MAV_MISSION_DENIED, msg.mission_type, src)
+        return Refusal(f"{name}: {who}", (Send(ack, src),))
+    if name == "MISSION_SET_CURRENT":
+        text = cm.statustext(_d.MAV_SEVERITY_WARNING, f"Set current refused: {why}")
+        return Refusal(f"{name}: {who}", (Send(text, src),))
+    if name in SILENT_STATE_CHANGES:
+        return Refusal(f"{name}: {who}", ())
+    return None
+
+
 @dataclass(frozen=True)
 class ManagerConfig:
     status_period: float = 1.0            # "nominally 1 Hz"
@@ -230,23 +253,8 @@ class ControlManager:
         src, msg = frame.source, frame.msg
         if self.may_command(src[0]) or not cm.addressed_to(msg, self.system, self.component):
             return None
-        name = msg._type
-        who = f"GCS {src[0]} is not in control (gcs_main {self.owner})"
-        if name in ("COMMAND_LONG", "COMMAND_INT"):
-            if msg.command in FREE_COMMANDS:
-                return None
-            ack = cm.command_ack(msg.command, _d.MAV_RESULT_NOT_IN_CONTROL, src)
-            return Refusal(f"{name} {msg.command}: {who}", (Send(ack, src),))
-        if name in MISSION_WRITES:
-            ack = cm.mission_ack(_d.MAV_MISSION_DENIED, msg.mission_type, src)
-            return Refusal(f"{name}: {who}", (Send(ack, src),))
-        if name == "MISSION_SET_CURRENT":
-            # the mission protocol reports a refused set-current with STATUSTEXT
-            text = cm.statustext(_d.MAV_SEVERITY_WARNING, "Set current refused: not in control")
-            return Refusal(f"{name}: {who}", (Send(text, src),))
-        if name in SILENT_STATE_CHANGES:
-            return Refusal(f"{name}: {who}", ())
-        return None
+        return refuse_state_change(msg, src, f"GCS {src[0]} is not in control (gcs_main {self.owner})",
+                                   _d.MAV_RESULT_NOT_IN_CONTROL, "not in control")
 
     def withdraw(self, requester: int, now: float) -> list[Action]:
         """End a forwarded request from `requester`, or a takeover window opened for it, now,

@@ -56,7 +56,7 @@ from ..mission.actions import Send
 from ..wire.dialect import mavlink as _d
 from ..wire.frame import Frame
 from . import control_messages as cm
-from .control_manager import FREE_COMMANDS, MISSION_WRITES, SILENT_STATE_CHANGES, ControlManager, ManagerConfig
+from .control_manager import ControlManager, ManagerConfig, refuse_state_change
 from .control_results import OwnerLost, Refusal
 from .control_transitions import ControlEvent
 from .emergency import (BatteryModel, BatteryState, Refuge, RefugeKind, Trigger, TriggerKind, TriggerPolicy,
@@ -215,23 +215,11 @@ def screen(frame: Frame, system: int, component: int, entitled: Callable[[int], 
         return None
     name = msg._type
     who = f"GCS {src[0]}: emergency, no GCS in control"
-    if name in ("COMMAND_LONG", "COMMAND_INT"):
-        if cm.is_request_control(msg):
-            if msg.param1 != cm.ACTION_REQUEST or entitled(src[0]):
-                return None
-        elif msg.command in FREE_COMMANDS:
-            return None
+    if name in ("COMMAND_LONG", "COMMAND_INT") and cm.is_request_control(msg) \
+            and msg.param1 == cm.ACTION_REQUEST and not entitled(src[0]):
         ack = cm.command_ack(msg.command, _d.MAV_RESULT_TEMPORARILY_REJECTED, src)
         return Refusal(f"{name} {msg.command}: {who}", (Send(ack, src),))
-    if name in MISSION_WRITES:
-        ack = cm.mission_ack(_d.MAV_MISSION_DENIED, msg.mission_type, src)
-        return Refusal(f"{name}: {who}", (Send(ack, src),))
-    if name == "MISSION_SET_CURRENT":
-        text = cm.statustext(_d.MAV_SEVERITY_WARNING, "Set current refused: emergency")
-        return Refusal(f"{name}: {who}", (Send(text, src),))
-    if name in SILENT_STATE_CHANGES:
-        return Refusal(f"{name}: {who}", ())
-    return None
+    return refuse_state_change(msg, src, who, _d.MAV_RESULT_TEMPORARILY_REJECTED, "emergency")
 
 
 def revoke_owner(manager: ControlManager, reason: str, now: float) -> list[Any]:
