@@ -47,7 +47,7 @@ from ..wire.frame import Frame
 from ..wire.signing import Keyring, SigningKey, secret_from_hex, secret_from_passphrase
 from ..wire.dialect import mavlink as _d
 from . import control_messages as cm
-from .control_manager import ControlManager, ManagerConfig
+from .control_manager import refuse_state_change
 from .control_results import Refusal
 
 
@@ -107,9 +107,6 @@ class UnknownGcsGate:
     def __init__(self, roster: Roster, system: int, component: int) -> None:
         self.known = roster.sysids | {system}
         self.system, self.component = system, component
-        # A manager nobody ever controls and closed while unowned: its `screen` is exactly
-        # what a GCS not in control is refused, whatever the real manager's settings.
-        self._closed = ControlManager(system, component, ManagerConfig(open_when_unowned=False))
         self.refused: Counter[int] = Counter()   # refused frames by unknown system id
 
     def screen(self, frame: Frame) -> Refusal | None:
@@ -124,9 +121,11 @@ class UnknownGcsGate:
             refusal = Refusal(f"{name} {msg.command}: {who}", (Send(ack, src),))
         elif name == "COMMAND_ACK" and msg.command == cm.REQUEST_CONTROL:
             refusal = Refusal(f"{name}: {who}", ())   # an answer to a forward it never got
+        elif cm.addressed_to(msg, self.system, self.component):
+            # what a GCS not in control is refused, whatever the real manager's settings
+            refusal = refuse_state_change(msg, src, who, _d.MAV_RESULT_NOT_IN_CONTROL, "not in control")
         else:
-            closed = self._closed.screen(frame)
-            refusal = None if closed is None else Refusal(f"{closed.reason.split(':')[0]}: {who}", closed.actions)
+            refusal = None
         if refusal is not None:
             self.refused[src[0]] += 1
         return refusal
