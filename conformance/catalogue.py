@@ -329,21 +329,26 @@ CLAUSES: tuple[Clause, ...] = (
        "region, it triggers the authority handover process."),
 )
 
-BY_ID: dict[str, Clause] = {c.id: c for c in CLAUSES}
-assert len(BY_ID) == len(CLAUSES), "duplicate clause id"
+# The GCS's side (MIS.G.*, role gcs): judged by `mavconform run --role gcs`, apart from these.
+from .gcs.clauses import GCS_CLAUSES  # noqa: E402
+
+BY_ID: dict[str, Clause] = {c.id: c for c in CLAUSES + GCS_CLAUSES}
+assert len(BY_ID) == len(CLAUSES) + len(GCS_CLAUSES), "duplicate clause id"
+BY_ROLE: dict[Role, tuple[Clause, ...]] = {V: CLAUSES, Role.GCS: GCS_CLAUSES}
 
 
-def select(globs: str | None = None, levels: str | None = None) -> list[Clause]:
-    """Clauses matching any of the comma-separated id globs (case-insensitive) and levels.
-    A glob that matches nothing, or an unknown level, is the user's mistake."""
-    chosen = list(CLAUSES)
+def select(globs: str | None = None, levels: str | None = None, role: Role = V) -> list[Clause]:
+    """The role's clauses matching any of the comma-separated id globs (case-insensitive)
+    and levels. A glob that matches none of them, or an unknown level, is the user's mistake."""
+    pool = BY_ROLE[role]
+    chosen = list(pool)
     if globs is not None:
         patterns = [g.strip().upper() for g in globs.split(",") if g.strip()]
         if not patterns:
             raise UsageError(f"--clauses {globs!r}: no pattern given")
         for p in patterns:
-            if not any(fnmatch.fnmatchcase(c.id, p) for c in CLAUSES):
-                raise UsageError(f"--clauses: {p!r} matches no clause (try `mavconform clauses`)")
+            if not any(fnmatch.fnmatchcase(c.id, p) for c in pool):
+                raise UsageError(f"--clauses: {p!r} matches no {role.value} clause (try `mavconform clauses`)")
         chosen = [c for c in chosen if any(fnmatch.fnmatchcase(c.id, p) for p in patterns)]
     if levels is not None:
         wanted = set()

@@ -14,7 +14,8 @@ SEED_000 = "seeds/000_e382b17b02933558.txt"   # the Mission Protocol text (secon
 SEED_001 = "seeds/001_8a174eac43c4bfd2.txt"   # MAVLink framing, routing and signing
 UPSTREAM = "mavlink-upstream/common.xml"       # upstream message definitions
 
-_ID = re.compile(r"(MIS|HO)\.[A-Z]{2,4}\.\d{2}")   # HO: handover (operator control)
+# HO: handover (operator control); MIS.G.*: the GCS's side of the Mission Protocol
+_ID = re.compile(r"(MIS|HO)(\.G)?\.[A-Z]{2,4}\.\d{2}")
 
 
 class Level(str, Enum):
@@ -33,7 +34,7 @@ class Role(str, Enum):
 
 @dataclass(frozen=True)
 class Clause:
-    id: str            # stable: MIS|HO.<group>.<nn>; never renumbered, retired ids are not reused
+    id: str            # stable: MIS|HO[.G].<group>.<nn>; never renumbered, retired ids are not reused
     level: Level
     role: Role
     title: str         # one line in our words
@@ -46,4 +47,4 @@ class Clause:
 
     @property
     def group(self) -> str:
-        return self.id.split(".")[1]
+        return self.id.split(".", 1)[1].rsplit(".", 1)[0]   # "UP"; a GCS clause's "G.UP"

@@ -37,6 +37,7 @@ class RunOptions:
     expectations: str | None = None
     baseline: str | None = None
     handover_scenario: str | None = None   # --handover-scenario (None: the conformance scenario)
+    role: str = "vehicle"                   # --role: which side of the protocol the target plays
 
 
 def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
@@ -62,6 +63,7 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
             "interrupted": run.interrupted,
             "interrupted_at": run.interrupted_at, "interrupted_by": run.interrupted_by,
             **({"handover_scenario": options.handover_scenario} if options.handover_scenario else {}),
+            **({"role": options.role} if options.role != "vehicle" else {}),
         },
         "identity": identity,
         "summary": {"total": len(run.results), **counts, "gating_failures": failing,

@@ -4,6 +4,19 @@ Prints one line per clause as it is decided (the requirement and the reason unde
 clause that did not pass), then a summary, and writes run.json, run.junit.xml, run.md,
 run.html and run.mcap to the report folder.
 
+With --role gcs the suite plays the vehicle and judges a ground station or SDK instead (the
+MIS.G.* clauses): a scripted vehicle on UDP 127.0.0.1 answers as the spec says except where a
+clause's script drops, repeats, mistypes or refuses, and the GCS is told to upload, download,
+clear or set current once per operation. The GCS under test is --target builtin:gcs (the
+reference GCS, the default), gcs-mutant:NAME, or a command run per operation:
+  --gcs-cmd 'CMD {port} {op} {file}'
+where {port} is the scripted vehicle's UDP port on 127.0.0.1 (the GCS sends first), {op} is
+upload, download, clear or set-current, and {file} a JSON job file naming the plan type, the
+items (upload), the item (set-current) and where to write the result ({type} and {seq} are
+there too). The command exits 0 when the GCS reported success; it is killed after
+--gcs-timeout seconds. docs/gcs-conformance.md gives the job format and the adapters shipped
+for the reference GCS, MAVSDK and MAVProxy (tools/gcs_adapters/).
+
 Exit codes: 0 every clause passed or is a known deviation (SHOULD failures count only with
 --strict); 1 a clause failed unexpectedly, could not be decided, or the target did not
 answer (with --baseline: only a clause that passed in the baseline and does not now);
@@ -28,7 +41,9 @@ from typing import Any
 from mavconform.conformance import document, suite
 from mavconform.conformance.clause import Clause
 from mavconform.conformance.outcome import ClauseResult, Outcome
+from mavconform.conformance.gcs import suite as gcs_suite
 from mavconform.conformance.target_uri import FORMS
+from mavconform.reference_impl.errors import UsageError
 
 from .options import sigterm_as_interrupt, time_scale
 
@@ -39,9 +54,18 @@ MARK = {Outcome.PASS: "PASS", Outcome.FAIL: "FAIL", Outcome.KNOWN_DEVIATION: "KN
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run the conformance suite against a target",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--target", default="builtin:spec", metavar="URI",
+    p.add_argument("--role", choices=("vehicle", "gcs"), default="vehicle",
+                   help="which side the target plays: vehicle (default; the MIS.* and HO.* clauses) or gcs "
+                        "(the suite plays the vehicle; the MIS.G.* clauses)")
+    p.add_argument("--target", metavar="URI",
                    help=f"what to test: {FORMS} (default builtin:spec: our reference vehicle "
-                        "over UDP loopback)")
+                        f"over UDP loopback); with --role gcs: {gcs_suite.TARGET_FORMS} (default {gcs_suite.BUILTIN})")
+    p.add_argument("--gcs-cmd", metavar="CMD",
+                   help="with --role gcs: the GCS under test as a command run per operation, "
+                        "'CMD {port} {op} {file}' (see above)")
+    p.add_argument("--gcs-timeout", type=float, default=gcs_suite.DEFAULT_TIMEOUT_S, metavar="S",
+                   help=f"with --role gcs: the bound on one operation; past it the GCS is stopped "
+                        f"(default {gcs_suite.DEFAULT_TIMEOUT_S:g})")
     p.add_argument("--clauses", default="*", metavar="GLOB",
                    help="clause ids to run, comma-separated globs, e.g. 'MIS.UP.*,MIS.CLR.0?' (default all)")
     p.add_argument("--level", metavar="LEVELS", help="only these levels, e.g. MUST or MUST,SHOULD")
@@ -76,16 +100,20 @@ def run(args: argparse.Namespace) -> int:
     the module docstring); SIGTERM before or after the run raises KeyboardInterrupt, which
     the command line also turns into 130."""
     with sigterm_as_interrupt():
-        options = document.RunOptions(target=args.target, clauses=args.clauses, strict=args.strict,
-                                      time_scale=args.time_scale, seed=args.seed,
-                                      expectations=args.expect, baseline=args.baseline,
-                                      handover_scenario=args.handover_scenario)
-        prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
-        print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
-        on_result = None if args.quiet else _printer()
-        allow = True if args.allow_flight else None
-        doc, outcome = suite.execute(prepared, allow_flight=allow, restore=not args.no_restore,
-                                     on_result=on_result)
+        if args.role == "gcs":
+            doc, outcome = _run_gcs(args)
+        else:
+            _vehicle_only(args)
+            options = document.RunOptions(target=args.target or "builtin:spec", clauses=args.clauses,
+                                          strict=args.strict, time_scale=args.time_scale, seed=args.seed,
+                                          expectations=args.expect, baseline=args.baseline,
+                                          handover_scenario=args.handover_scenario)
+            prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
+            print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
+            on_result = None if args.quiet else _printer()
+            allow = True if args.allow_flight else None
+            doc, outcome = suite.execute(prepared, allow_flight=allow, restore=not args.no_restore,
+                                         on_result=on_result)
         if outcome.unresponsive and outcome.identity is None:
             print(f"mavconform: target unresponsive: {outcome.unresponsive}", file=sys.stderr)
         _summary(doc, args.report_dir)
@@ -99,6 +127,30 @@ def run(args: argparse.Namespace) -> int:
                   "back and the reports written first", file=sys.stderr)
             return EXIT_INTERRUPTED
         return 0 if doc["summary"]["verdict"] == "pass" else 1
+
+
+def _vehicle_only(args: argparse.Namespace) -> None:
+    given = [flag for flag, value in (("--gcs-cmd", args.gcs_cmd),
+                                      ("--gcs-timeout", args.gcs_timeout != gcs_suite.DEFAULT_TIMEOUT_S))
+             if value]
+    if given:
+        raise UsageError(f"{given[0]} is for --role gcs")
+
+
+def _run_gcs(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
+    """The GCS side: the options a vehicle run has that mean nothing here are refused."""
+    given = [flag for flag, value in (("--handover-scenario", args.handover_scenario),
+                                      ("--allow-flight", args.allow_flight), ("--no-restore", args.no_restore),
+                                      ("--time-scale", args.time_scale != 1.0)) if value]
+    if given:
+        raise UsageError(f"{given[0]} is for --role vehicle; a GCS run has no vehicle of its own to fly or restore")
+    target = f"cmd:{args.gcs_cmd}" if args.gcs_cmd is not None else (args.target or gcs_suite.BUILTIN)
+    options = document.RunOptions(target=target, clauses=args.clauses, strict=args.strict, seed=args.seed,
+                                  expectations=args.expect, baseline=args.baseline, role="gcs")
+    prepared = gcs_suite.prepare(options, target=args.target, command=args.gcs_cmd, levels=args.level,
+                                 report_dir=args.report_dir, timeout_s=args.gcs_timeout)
+    print(f"mavconform: {len(prepared.clauses)} GCS clauses against {prepared.adapter.describe()}", flush=True)
+    return gcs_suite.execute(prepared, on_result=None if args.quiet else _printer())
 
 
 def _printer():
@@ -117,8 +169,8 @@ def _summary(doc: dict[str, Any], report_dir: str) -> None:
     from mavconform.reports.run_document import run_facts
     s = doc["summary"]
     ident, timing = doc["identity"], run_facts(doc)
-    who = (f"system {ident['system']} component {ident['component']} at {timing['address']}"
-           if ident else "no HEARTBEAT")
+    where = f" at {timing['address']}" if timing["address"] else ""
+    who = f"system {ident['system']} component {ident['component']}{where}" if ident else "no HEARTBEAT"
     print(f"\ntarget {doc['run']['target']} ({who}); {timing['duration_s']:.1f} s")
     print("  outcome          clauses")
     for name in ("pass", "fail", "known-deviation", "not-applicable", "skipped", "error"):

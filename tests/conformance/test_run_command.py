@@ -104,7 +104,7 @@ def test_dead_target_is_reported_fast(tmp_path, capsys) -> None:
     (["run", "--target", "tcp:1.2.3.4:5"], "unknown scheme"),
     (["run", "--target", "udp:127.0.0.1:99999"], "bad port"),
     (["run", "--target", "mutant:nope"], "unknown mutant"),
-    (["run", "--clauses", "MIS.NOPE.*"], "matches no clause"),
+    (["run", "--clauses", "MIS.NOPE.*"], "matches no vehicle clause"),
     (["run", "--clauses", ""], "no pattern given"),          # issue 12: not "run everything"
     (["run", "--level", ""], "no level given"),
     (["run", "--level", " , "], "no level given"),

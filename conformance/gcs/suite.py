@@ -1,0 +1,125 @@
+"""One GCS conformance run from options to reports: `mavconform run --role gcs`.
+
+The GCS under test is named like a vehicle target: `builtin:gcs` (the reference GCS, in
+this process, over UDP loopback), `gcs-mutant:NAME` (one with a planted bug), or a command
+(`--gcs-cmd 'CMD {port} {op} {file}'`, adapters.py). Everything is checked before the first
+operation, as for vehicles; the reports, expectation files and baseline gating are the
+vehicle run's own (conformance/document.py, gating.py, reports/).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import signal
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.net.capture import McapCapture
+
+from .. import catalogue, document, expectations, gating
+from ..clause import Clause, Role
+from ..runner import InterruptGuard, OnResult, RunOutcome
+from .adapters import CommandAdapter, GcsAdapter, NodeAdapter
+from .harness import GcsHarness
+from .runner import run_gcs_clauses
+
+CAPTURE_NAME = "run.mcap"
+BUILTIN = "builtin:gcs"
+MUTANT_PREFIX = "gcs-mutant:"
+TARGET_FORMS = f"{BUILTIN} (the reference GCS) or {MUTANT_PREFIX}NAME (`mavconform clauses --mutants`)"
+DEFAULT_TIMEOUT_S = 30.0
+
+
+@dataclass
+class PreparedGcs:
+    options: document.RunOptions
+    adapter: GcsAdapter
+    clauses: list[Clause]
+    expected: dict[str, expectations.Deviation]
+    baseline: dict[str, str] | None
+    report_dir: Path | None
+    timeout_s: float
+
+
+def gcs_adapter(target: str | None, command: str | None, workdir: Path | None = None) -> GcsAdapter:
+    """The adapter for `--target` or `--gcs-cmd` (one of them; neither: the reference GCS)."""
+    if command is not None:
+        if target is not None:
+            raise UsageError("--gcs-cmd and --target both name the GCS under test: give one")
+        return CommandAdapter(command, workdir=workdir)
+    target = target or BUILTIN
+    if target == BUILTIN:
+        return NodeAdapter()
+    if target.startswith(MUTANT_PREFIX):
+        from .mutants import GCS_MUTANTS
+        name = target[len(MUTANT_PREFIX):]
+        if name not in GCS_MUTANTS:
+            raise UsageError(f"--target {target!r}: no GCS mutant {name!r} (known: {', '.join(sorted(GCS_MUTANTS))})")
+        return NodeAdapter(f"GCS mutant {name}", build=GCS_MUTANTS[name].build)
+    raise UsageError(f"--target {target!r}: with --role gcs the GCS under test is {TARGET_FORMS}, "
+                     "or a command (--gcs-cmd)")
+
+
+def prepare(options: document.RunOptions, *, target: str | None, command: str | None,
+            levels: str | None = None, report_dir: str | Path | None = None,
+            timeout_s: float = DEFAULT_TIMEOUT_S) -> PreparedGcs:
+    if not (timeout_s > 0 and math.isfinite(timeout_s)):
+        raise UsageError(f"--gcs-timeout must be a finite number > 0, got {timeout_s!r}")
+    clauses = catalogue.select(options.clauses, levels, role=Role.GCS)
+    if not clauses:
+        raise UsageError(f"no GCS clause matches --clauses {options.clauses!r} with --level {levels!r}")
+    expected = expectations.load(options.expectations) if options.expectations else {}
+    baseline = None
+    if options.baseline:
+        from mavconform.reports.run_document import load_run
+        baseline = gating.baseline_outcomes(load_run(options.baseline), options.baseline)
+    out = None
+    if report_dir is not None:
+        out = Path(report_dir)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise UsageError(f"cannot create report folder {str(out)!r}: {exc.strerror}") from None
+    workdir = (out / "gcs-jobs") if out is not None else Path(tempfile.mkdtemp(prefix="mavconform-gcs-"))
+    adapter = gcs_adapter(target, command, workdir)
+    return PreparedGcs(options, adapter, clauses, expected, baseline, out, timeout_s)
+
+
+def execute(p: PreparedGcs, *, virtual: bool = False, on_result: OnResult | None = None,
+            stop_signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> tuple[dict[str, Any], RunOutcome]:
+    """Run the prepared GCS clauses; return the run document (reports written if asked).
+    `virtual`: in virtual time (an in-process GCS only; the tool's own tests)."""
+    started = dt.datetime.now(dt.timezone.utc)
+    if p.expected:
+        shown = on_result
+
+        def on_result(clause: Clause, result: Any) -> None:
+            gating.apply_expectations([result], p.expected)
+            if shown is not None:
+                shown(clause, result)
+    with InterruptGuard(stop_signals) as guard:
+        capture = None
+        if p.report_dir is not None and not virtual:
+            capture = McapCapture(p.report_dir / CAPTURE_NAME)
+        try:
+            harness = GcsHarness(p.adapter, real_time=not virtual, timeout_s=p.timeout_s, seed=p.options.seed,
+                                 capture=guard.atomic(capture) if capture is not None else None)
+            run = run_gcs_clauses(harness, p.clauses, on_result=on_result, guard=guard)
+        finally:
+            guard.hold()
+            if capture is not None:
+                capture.close()
+        gating.apply_expectations(run.results, p.expected)
+        flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
+        doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
+                             capture=CAPTURE_NAME if capture is not None else None)
+        if p.report_dir is not None:
+            from mavconform.reports.write import write_reports
+            write_reports(doc, p.report_dir)
+    if guard.received and not run.interrupted:
+        run.late_signal = guard.first
+    return doc, run
