@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test run run-profiles run-mavsdk demo fuzz fault-table vectors handover bench clean
+.PHONY: setup test run run-profiles run-mavsdk run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -46,6 +46,33 @@ run-mavsdk: $(VENV)/.interop-installed  ## the suite vs MAVSDK's MissionRawServe
 	echo "run-mavsdk: MAVSDK MissionRawServer at $$target; not run: $(MAVSDK_SKIP)"; \
 	timeout 600 $(BIN)/mavconform run --target $$target --expect mavsdk --clauses "$$clauses" --report-dir $(MAVSDK_OUT) -q
 
+# GCS conformance (docs/gcs-conformance.md): the suite plays the vehicle. MAVProxy gets a venv of
+# its own (.venv-mavproxy, pinned: expectations/mavproxy-gcs.toml describes that release), so its
+# dependencies never meet ours; its adapter needs nothing of mavconform. MAVSDK is the interop
+# extra's wheel. The two clients run side by side: most of their time is waiting on timeouts.
+MAVPROXY_VENV := .venv-mavproxy
+GCS_TIMEOUT   := 12
+GCS_CMD_MAVSDK   := $(BIN)/python tools/gcs_adapters/mavsdk_gcs.py {gcs_port} {op} {file}
+GCS_CMD_MAVPROXY := $(MAVPROXY_VENV)/bin/python tools/gcs_adapters/mavproxy_gcs.py {gcs_port} {op} {file}
+
+$(MAVPROXY_VENV)/.installed:
+	$(PYTHON) -m venv $(MAVPROXY_VENV)
+	$(MAVPROXY_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(MAVPROXY_VENV)/bin/python -m pip install --quiet MAVProxy==1.8.75
+	touch $@
+
+run-gcs: setup       ## the GCS clauses vs the reference GCS over UDP loopback -> reports/gcs/
+	$(BIN)/mavconform run --role gcs --target builtin:gcs --report-dir reports/gcs -q
+
+run-gcs-clients: $(VENV)/.interop-installed $(MAVPROXY_VENV)/.installed  ## the GCS clauses vs MAVSDK and MAVProxy, with their expectation files
+	@$(BIN)/mavconform run --role gcs --gcs-timeout $(GCS_TIMEOUT) --gcs-cmd '$(GCS_CMD_MAVPROXY)' \
+		--expect mavproxy-gcs --report-dir reports/gcs-mavproxy -q > reports/gcs-mavproxy.log 2>&1 & pid=$$!; \
+	$(BIN)/mavconform run --role gcs --gcs-timeout $(GCS_TIMEOUT) --gcs-cmd '$(GCS_CMD_MAVSDK)' \
+		--expect mavsdk-gcs --report-dir reports/gcs-mavsdk -q; mavsdk=$$?; \
+	wait $$pid; mavproxy=$$?; echo "--- MAVProxy:"; cat reports/gcs-mavproxy.log; \
+	echo "run-gcs-clients: MAVSDK exit $$mavsdk, MAVProxy exit $$mavproxy"; \
+	test $$mavsdk -eq 0 && test $$mavproxy -eq 0
+
 demo: setup          ## reference GCS <-> reference vehicle over lossy UDP loopback
 	$(BIN)/mavconform demo
 
@@ -75,4 +102,5 @@ bench: setup         ## figures, not pass/fail
 	$(BIN)/python bench/handover_scenario.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot reports/mavsdk reports/handover fuzz-findings
+	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot reports/mavsdk reports/handover fuzz-findings \
+		reports/gcs reports/gcs-mavsdk reports/gcs-mavproxy reports/gcs-mavproxy.log $(MAVPROXY_VENV)

@@ -1,8 +1,10 @@
 """`mavconform clauses`: list the clauses the suite decides (and the mutants that break them).
 
 Each line: id, level, role, title, and where the requirement comes from. Filter with
---clauses (comma-separated globs) and --level. --mutants lists the negative controls:
-reference vehicles with one behaviour broken, usable as targets (`mutant:NAME`).
+--clauses (comma-separated globs) and --level. --role gcs lists the GCS side (MIS.G.*,
+`mavconform run --role gcs`) instead of the vehicle's. --mutants lists the negative controls:
+reference vehicles with one behaviour broken, usable as targets (`mutant:NAME`), or with
+--role gcs reference GCSs with one (`gcs-mutant:NAME`).
 --coverage prints the spec-coverage map instead (docs/spec-coverage.md): every requirement
 sentence of seed 000 and the clauses that check it, or why none does.
 """
@@ -15,6 +17,7 @@ import sys
 from pathlib import Path
 
 from mavconform.conformance import catalogue
+from mavconform.conformance.clause import Role
 from mavconform.reference_impl.errors import UsageError
 
 
@@ -23,6 +26,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--clauses", metavar="GLOB", help="comma-separated id globs, e.g. 'MIS.UP.*'")
     p.add_argument("--level", metavar="LEVELS", help="only these levels, e.g. MUST or SHOULD,MAY")
+    p.add_argument("--role", choices=("vehicle", "gcs"), default="vehicle",
+                   help="which side's clauses: vehicle (default) or gcs (MIS.G.*)")
     p.add_argument("--requirement", action="store_true", help="print each requirement sentence too")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--mutants", action="store_true", help="list the mutant vehicles instead")
@@ -35,7 +40,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _coverage(args: argparse.Namespace) -> int:
     from mavconform.conformance.spec_coverage import render_markdown
-    if args.clauses or args.level or args.mutants or args.json or args.requirement:
+    if args.clauses or args.level or args.mutants or args.json or args.requirement or args.role != "vehicle":
         raise UsageError("--coverage: covers every clause; it takes no other option but --output")
     text = render_markdown()
     if not args.output:
@@ -57,7 +62,10 @@ def run(args: argparse.Namespace) -> int:
         return _coverage(args)
     if args.output:
         raise UsageError("--output: only with --coverage")
-    chosen = catalogue.select(args.clauses, args.level)
+    role = Role(args.role)
+    chosen = catalogue.select(args.clauses, args.level, role=role)
+    if args.mutants and role is Role.GCS:
+        return _gcs_mutants(args, {c.id for c in chosen})
     if args.mutants:
         from mavconform.conformance.mutants import MUTANTS
         wanted = {c.id for c in chosen}
@@ -81,4 +89,16 @@ def run(args: argparse.Namespace) -> int:
         if args.requirement:
             print(f"{'':<27}\"{c.requirement}\"")
     print(f"{len(chosen)} clauses")
+    return 0
+
+
+def _gcs_mutants(args: argparse.Namespace, wanted: set[str]) -> int:
+    from mavconform.conformance.gcs.mutants import GCS_MUTANTS
+    rows = [mu for mu in GCS_MUTANTS.values() if mu.breaks & wanted]
+    if args.json:
+        print(json.dumps([{"name": mu.name, "description": mu.description,
+                           "breaks": sorted(mu.breaks)} for mu in rows], indent=2))
+        return 0
+    for mu in rows:
+        print(f"gcs-mutant:{mu.name:<24} {mu.description}\n{'':<36} breaks {', '.join(sorted(mu.breaks))}")
     return 0

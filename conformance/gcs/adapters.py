@@ -39,6 +39,7 @@ from .stage import Stage
 REQUIRED = ("{op}", "{file}")
 PORTS = ("{port}", "{gcs_port}")
 STOP_GRACE_S = 3.0    # after SIGTERM, before SIGKILL
+USAGE_EXIT = 2        # the adapter could not run the job (a bad job, or its GCS is missing)
 LOG_LINES = 8
 
 
@@ -98,7 +99,7 @@ class CommandAdapter:
         if not stage.real_time:
             raise UsageError("a GCS command needs real UDP (it is told the vehicle's port)")
         self._count += 1
-        folder = Path(self._workdir or tempfile.mkdtemp(prefix="mavconform-gcs-"))
+        folder = Path(self._workdir or tempfile.mkdtemp(prefix="mavconform-gcs-")).resolve()
         folder.mkdir(parents=True, exist_ok=True)
         job_file = folder / f"job-{self._count:03d}.json"
         result_file = folder / f"result-{self._count:03d}.json"
@@ -151,7 +152,8 @@ class _Process:
             got.at, got.log = at, tail
             return got
         said = tail[-1] if tail else ""
-        return JobResult(code == 0, f"exit code {code}" + (f": {said}" if said else ""), at=at, log=tail)
+        return JobResult(code == 0, f"exit code {code}" + (f": {said}" if said else ""), at=at, log=tail,
+                         refused_job=code == USAGE_EXIT)
 
     def _tail(self) -> list[str]:
         try:

@@ -168,6 +168,16 @@ def first_told(op: Operation, *names_: str, **fields: Any) -> Event | None:
     return next((e for e in op.told(*names_) if all(getattr(e.msg, k) == v for k, v in fields.items())), None)
 
 
+def scripted(op: Operation, what: str, *names_: str, **fields: Any) -> Event:
+    """The vehicle's scripted move the check is about; if the GCS never led the vehicle to
+    it, the clause is undecided, not failed (another clause judges what the GCS did)."""
+    event = first_told(op, *names_, **fields)
+    if event is None:
+        raise PreconditionFailed(f"the GCS never led the vehicle to send {what}; it sent "
+                                 f"{names(mission_sent(op))} ({op.result.line()})")
+    return event
+
+
 # --- upload -------------------------------------------------------------------------------------
 @check("MIS.G.UP.01")
 def count_first(h: GcsHarness) -> str:
@@ -281,7 +291,7 @@ def error_ack_ends_upload(h: GcsHarness) -> str:
     op = h.run(_upload(), after=WATCH_AFTER,
                rules=[Swap(named(*REQUESTS, seq=0), what="MISSION_ACK NO_SPACE",
                            instead=lambda reply, v: [m.ack_message(MissionResult.NO_SPACE, MISSION, v.target)])])
-    nack = first_told(op, "MISSION_ACK")
+    nack = scripted(op, "its NO_SPACE", "MISSION_ACK")
     items = op.after(nack, *ITEMS)
     if items:
         raise fail(h, op, items[0], f"{_short(items[0].msg)} was sent after the vehicle's NO_SPACE")
@@ -384,9 +394,9 @@ def item_request_resent(h: GcsHarness) -> str:
     return Measured("the request for item 1 was resent after <s> s", s=f"{asked[1].t - asked[0].t:.3f}")
 
 
-def _final_ack(h: GcsHarness, op: Operation, last: Event | None, what: str) -> Event:
+def _final_ack(h: GcsHarness, op: Operation, last: Event, what: str) -> Event:
     """The GCS's first MISSION_ACK after the vehicle's `last` message of the download."""
-    acks = op.after(last, "MISSION_ACK") if last is not None else []
+    acks = op.after(last, "MISSION_ACK")
     if not acks:
         raise fail(h, op, op.sent()[-1], f"no MISSION_ACK after {what} ({op.result.line()})")
     ack = acks[0]
@@ -400,14 +410,14 @@ def _final_ack(h: GcsHarness, op: Operation, last: Event | None, what: str) -> E
 @check("MIS.G.DN.05")
 def final_ack(h: GcsHarness) -> str:
     op = clean_download(h)
-    _final_ack(h, op, first_told(op, *ITEMS, seq=N - 1), "the last item")
+    _final_ack(h, op, scripted(op, "the last item", *ITEMS, seq=N - 1), "the last item")
     return "MISSION_ACK ACCEPTED after the last item"
 
 
 @check("MIS.G.DN.06")
 def empty_download(h: GcsHarness) -> str:
     op = h.run(_download(), plans=_stored(items=[]))
-    _final_ack(h, op, first_told(op, "MISSION_COUNT"), "MISSION_COUNT 0")
+    _final_ack(h, op, scripted(op, "MISSION_COUNT 0", "MISSION_COUNT"), "MISSION_COUNT 0")
     require_success(h, op, "the empty plan was acknowledged")
     if op.result.items:
         raise ClauseFailed(f"the GCS reported {len(op.result.items)} items for an empty plan")
@@ -420,7 +430,7 @@ def out_of_sequence_item(h: GcsHarness) -> str:
     op = h.run(_download(), plans=_stored(), rules=[Swap(
         named(*ITEMS, seq=1), what="item 2 sent in its place",
         instead=lambda reply, v: [m.item_message(plan[2], v.target, as_int=reply._type == "MISSION_ITEM_INT")])])
-    wrong = next(e for e in op.told(*ITEMS) if e.msg.seq == 2)
+    wrong = scripted(op, "item 2 in place of item 1", *ITEMS, seq=2)
     again = next((e for e in op.after(wrong, *REQUESTS) if e.msg.seq == 1), None)
     if again is None:
         raise fail(h, op, wrong, f"after item 2 came in place of item 1 the GCS sent "
@@ -435,7 +445,7 @@ def out_of_sequence_item(h: GcsHarness) -> str:
 
 
 def _ended_by(h: GcsHarness, op: Operation, code: MissionResult) -> str:
-    ack = first_told(op, "MISSION_ACK")
+    ack = scripted(op, f"its {code.name}", "MISSION_ACK")
     later = op.after(ack, *REQUESTS, *ITEMS, "MISSION_REQUEST_LIST", "MISSION_COUNT")
     if later:
         raise fail(h, op, later[0], f"{_short(later[0].msg)} was sent after the vehicle's {code.name}")
@@ -548,7 +558,7 @@ def other_type_request(h: GcsHarness) -> str:
         named("MISSION_REQUEST_INT", seq=0, mission_type=MISSION), then_after=0.5,
         what="MISSION_REQUEST_INT 0 of the fence; the mission's 500 ms later",
         instead=lambda reply, v: [m.request_message(0, FENCE, v.target)])])
-    odd = first_told(op, "MISSION_REQUEST_INT", mission_type=FENCE)
+    odd = scripted(op, "the fence's request", "MISSION_REQUEST_INT", mission_type=FENCE)
     proper = first_told(op, "MISSION_REQUEST_INT", seq=0, mission_type=MISSION)
     answered = [e for e in op.after(odd, *ITEMS) if e.msg.seq == 0 and (proper is None or e.t < proper.t)]
     if answered:
@@ -564,7 +574,7 @@ def other_type_ack(h: GcsHarness) -> str:
         named("MISSION_REQUEST_INT", seq=1, mission_type=MISSION), then_after=0.2,
         what="MISSION_ACK ACCEPTED of the rally points; the request 200 ms later",
         instead=lambda reply, v: [m.ack_message(MissionResult.ACCEPTED, RALLY, v.target)])])
-    odd = first_told(op, "MISSION_ACK", mission_type=RALLY)
+    odd = scripted(op, "the rally ACK", "MISSION_ACK", mission_type=RALLY)
     h.decide(op, odd)
     rest = [e.msg.seq for e in op.after(odd, *ITEMS)]
     if not op.result.ok or not {1, 2} <= set(rest):
@@ -580,7 +590,7 @@ def other_type_item(h: GcsHarness) -> str:
         named(*ITEMS, seq=1, mission_type=MISSION), then_after=0.1,
         what="a fence item with seq 1; the mission's 100 ms later",
         instead=lambda reply, v: [m.item_message(fence[1], v.target, as_int=reply._type == "MISSION_ITEM_INT")])])
-    odd = first_told(op, *ITEMS, mission_type=FENCE)
+    odd = scripted(op, "the fence item", *ITEMS, mission_type=FENCE)
     h.decide(op, odd)
     if not op.result.ok:   # refusing the odd item ends the download, but takes nothing in
         return f"the fence item was not taken: {op.result.line()}"

@@ -102,6 +102,9 @@ class GcsHarness:
         self.operations.append(op)
         self._record(op)
         if not op.sent():
+            if result.refused_job:   # the adapter's failure, not the GCS's answer
+                raise TargetUnresponsive(f"the GCS command could not run the job to {job.describe()}: "
+                                         f"{result.said}")
             if result.ended and not result.ok:   # it said why: a refusal is its answer
                 raise ClauseFailed(f"the GCS would not {job.describe()}: it sent nothing ({result.line()})")
             raise TargetUnresponsive(f"the GCS sent no mission message to {job.describe()} "

@@ -65,6 +65,7 @@ class JobResult:
     items: tuple[MissionItem, ...] | None = None   # download: what the GCS got
     at: float = 0.0               # when the harness learnt it (its clock)
     log: list[str] = field(default_factory=list)   # the adapter's last lines, for the report
+    refused_job: bool = False     # the adapter exited 2 without a result: it never ran the GCS
 
     def line(self) -> str:
         how = "succeeded" if self.ok else "failed" if self.ended else "never ended"

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from mavconform.conformance import catalogue, spec_coverage
-from mavconform.conformance.clause import SEED_000
+from mavconform.conformance.clause import SEED_000, Role
 from mavconform.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -48,9 +48,56 @@ def test_every_entry_names_existing_clauses_or_says_why_none() -> None:
 
 
 def test_a_clause_that_quotes_a_listed_sentence_is_mapped_to_it() -> None:
-    missing = [(c.id, e.id) for c in catalogue.CLAUSES for e in spec_coverage.COVERAGE
-               if spec_coverage.quotes(c, e) and c.id not in e.clauses]
+    # both roles: the vehicle's clauses and the GCS's (MIS.G.*)
+    missing = [(c.id, e.id) for c in catalogue.CLAUSES + catalogue.GCS_CLAUSES for e in spec_coverage.COVERAGE
+               if spec_coverage.quotes(c, e) and c.id not in e.clauses
+               and (c.id, e.id) not in spec_coverage.QUOTED_NOT_CHECKED]
     assert not missing
+
+
+def test_each_quoted_but_unchecked_sentence_is_quoted_unmapped_and_says_why() -> None:
+    for (clause, sentence), why in spec_coverage.QUOTED_NOT_CHECKED.items():
+        entry = spec_coverage.BY_SENTENCE[sentence]
+        assert spec_coverage.quotes(catalogue.BY_ID[clause], entry), (clause, sentence)
+        assert clause not in entry.clauses, (clause, sentence)
+        assert why, (clause, sentence)
+
+
+def test_every_clause_of_both_roles_is_in_the_map() -> None:
+    """Each clause is listed with a requirement sentence, or quotes a seed 000 sentence the rule
+    does not find ("Other seed 000 sentences"), or comes from another source."""
+    mapped = {c for e in spec_coverage.COVERAGE for c in e.clauses}
+    elsewhere = {c.id for c in spec_coverage.unlisted_seed_clauses() + spec_coverage.other_source_clauses()}
+    absent = [c.id for c in catalogue.BY_ID.values() if c.id not in mapped | elsewhere]
+    assert not absent
+    doc = spec_coverage.render_markdown()
+    assert all(f"| {c.id} " in doc or f"{c.id} (" in doc for c in catalogue.BY_ID.values())
+
+
+def test_every_gcs_clause_from_seed_000_is_accounted_for() -> None:
+    """A GCS clause citing seed 000 is mapped to a requirement sentence or quotes one the rule
+    does not find; one from another source is listed with those."""
+    mapped = {c for e in spec_coverage.COVERAGE for c in e.clauses}
+    unlisted = {c.id for c in spec_coverage.unlisted_seed_clauses()}
+    others = {c.id for c in spec_coverage.other_source_clauses()}
+    for clause in catalogue.GCS_CLAUSES:
+        if clause.source.startswith(SEED_000 + ":"):
+            assert clause.id in mapped or clause.id in unlisted, clause.id
+        else:
+            assert clause.id in others, clause.id
+
+
+def test_a_gcs_side_sentence_no_clause_checks_says_so_and_checked_ones_do_not() -> None:
+    for entry in spec_coverage.COVERAGE:
+        gcs = [c for c in entry.clauses if catalogue.BY_ID[c].role is Role.GCS]
+        if gcs:
+            assert not entry.why.startswith(spec_coverage.GCS_SIDE), entry.id
+    assert "the suite checks vehicles" not in spec_coverage.render_markdown()
+
+
+def test_the_map_names_clauses_by_role() -> None:
+    doc = spec_coverage.render_markdown()
+    assert "MIS.G.DN.07 (SHOULD)" in doc and "on both sides" in doc
 
 
 def test_the_sentence_splitter_keeps_abbreviations() -> None:
