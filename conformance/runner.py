@@ -267,6 +267,36 @@ def _after_interrupt(session: Session) -> None:
     _settle(session, 0)
 
 
+def call_check(fn: Callable[[Any], Any], arg: Any) -> tuple[Outcome, Any, list[BaseException | str]]:
+    """Run a check and say how its clause came out, with the detail and what it was made from
+    (a Measured text keeps its numbers apart, see DecidedResult). Whatever else it raises is
+    a bug in the check: ours, never the target's failure."""
+    caught: list[BaseException | str] = []
+    try:
+        outcome, detail = Outcome.PASS, fn(arg) or ""
+        caught.append(detail)
+    except ClauseFailed as exc:
+        outcome, detail = Outcome.FAIL, _text(exc)
+        caught.append(exc)
+    except NotApplicable as exc:
+        outcome, detail = Outcome.NOT_APPLICABLE, _text(exc)
+        caught.append(exc)
+    except Skipped as exc:
+        outcome, detail = Outcome.SKIPPED, _text(exc)
+        caught.append(exc)
+    except PreconditionFailed as exc:
+        outcome, detail = Outcome.ERROR, f"precondition: {exc}"
+        caught.append(exc)
+    except TargetUnresponsive as exc:
+        outcome, detail = Outcome.ERROR, f"target unresponsive: {exc}"
+        caught.append(exc)
+    except Exception as exc:
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        outcome, detail = Outcome.ERROR, (f"internal error in check {fn.__name__}: "
+                                          f"{type(exc).__name__}: {exc} ({where.filename}:{where.lineno})")
+    return outcome, detail, caught
+
+
 def run_one(session: Session, clause: Clause) -> ClauseResult:
     fn = CHECKS.get(clause.id)
     if fn is None:
@@ -282,34 +312,13 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     began_at = len(session.t.node.inbox)
     session.current_clause = clause.id
     _mark(session, f"clause {clause.id}")
-    caught: list[BaseException | str] = []   # what the detail was made from
-    try:
-        outcome, detail = Outcome.PASS, fn(session) or ""
-        caught.append(detail)
-    except ClauseFailed as exc:
-        outcome, detail = Outcome.FAIL, _text(exc)
-        caught.append(exc)
-    except NotApplicable as exc:
-        outcome, detail = Outcome.NOT_APPLICABLE, _text(exc)
-        caught.append(exc)
-    except Skipped as exc:
-        outcome, detail = Outcome.SKIPPED, _text(exc)
-        caught.append(exc)
-    except PreconditionFailed as exc:
-        outcome, detail = Outcome.ERROR, f"precondition: {exc}"
-        caught.append(exc)
+    outcome, detail, caught = call_check(fn, session)
+    if caught and isinstance(caught[-1], PreconditionFailed):
         try:
             session.t.check_alive()   # a setup step that got nothing from a dead target
         except TargetUnresponsive as dead:
             detail = f"target unresponsive: {dead}"
             caught.append(dead)
-    except TargetUnresponsive as exc:
-        outcome, detail = Outcome.ERROR, f"target unresponsive: {exc}"
-        caught.append(exc)
-    except Exception as exc:   # a bug in the check: ours, never the target's failure
-        where = traceback.extract_tb(exc.__traceback__)[-1]
-        outcome, detail = Outcome.ERROR, (f"internal error in check {fn.__name__}: "
-                                          f"{type(exc).__name__}: {exc} ({where.filename}:{where.lineno})")
     # the event the check last judged (see Tester); not for a verdict no message decided:
     # a skip, a bug in the check, a crash
     decided_by = exchange.decided_by if outcome is not Outcome.SKIPPED else None

@@ -49,6 +49,14 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
     clauses = catalogue.select(options.clauses, levels)
     if not clauses:
         raise UsageError(f"no clause matches --clauses {options.clauses!r} with --level {levels!r}")
+    expected, baseline, out = checked_outputs(options, report_dir)
+    return Prepared(options, uri, clauses, expected, baseline, out)
+
+
+def checked_outputs(options: document.RunOptions, report_dir: str | Path | None
+                    ) -> tuple[dict[str, expectations.Deviation], dict[str, str] | None, Path | None]:
+    """The expectations, the baseline's outcomes and the report folder (made), each checked:
+    what judges and keeps a run, whichever side of the protocol it tests."""
     expected = expectations.load(options.expectations) if options.expectations else {}
     baseline = None
     if options.baseline:
@@ -61,7 +69,7 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise UsageError(f"cannot create report folder {str(out)!r}: {exc.strerror}") from None
-    return Prepared(options, uri, clauses, expected, baseline, out)
+    return expected, baseline, out
 
 
 def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = None,
@@ -75,15 +83,7 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
     that short, and the outcome says it was interrupted (or, in `late_signal`, that a signal
     came while that was being done)."""
     started = dt.datetime.now(dt.timezone.utc)
-    if p.expected:
-        # Judge each result against the expectations as it comes, so the live line already
-        # says KNOWN (or "deviation no longer observed"), as the reports will.
-        shown = on_result
-
-        def on_result(clause: Clause, result: ClauseResult) -> None:
-            gating.apply_expectations([result], p.expected)
-            if shown is not None:
-                shown(clause, result)
+    on_result = judged_live(on_result, p.expected)
     with InterruptGuard(stop_signals) as guard:
         capture = None
         if p.report_dir is not None:
@@ -104,13 +104,35 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
             guard.hold()
             if capture is not None:
                 capture.close()
-        gating.apply_expectations(run.results, p.expected)
-        flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
-        doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
-                             capture=CAPTURE_NAME if capture is not None else None)
-        if p.report_dir is not None:
-            from mavconform.reports.write import write_reports
-            write_reports(doc, p.report_dir)
+        doc = conclude(p.options, run, p.expected, p.baseline, p.report_dir, started=started,
+                       captured=capture is not None)
     if guard.received and not run.interrupted:
         run.late_signal = guard.first
     return doc, run
+
+
+def judged_live(on_result: OnResult | None, expected: dict[str, expectations.Deviation]) -> OnResult | None:
+    """`on_result` with each result judged against the expectations as it comes, so the live
+    line already says KNOWN (or "deviation no longer observed"), as the reports will."""
+    if not expected:
+        return on_result
+
+    def judged(clause: Clause, result: ClauseResult) -> None:
+        gating.apply_expectations([result], expected)
+        if on_result is not None:
+            on_result(clause, result)
+    return judged
+
+
+def conclude(options: document.RunOptions, run: RunOutcome, expected: dict[str, expectations.Deviation],
+             baseline: dict[str, str] | None, report_dir: Path | None, *, started: dt.datetime,
+             captured: bool) -> dict[str, Any]:
+    """Judge the run (expectations, then gating) and build its document; write the reports."""
+    gating.apply_expectations(run.results, expected)
+    flags, summary = gating.gate(run.results, strict=options.strict, baseline=baseline)
+    doc = document.build(options, run, started=started, gating_flags=flags, gating=summary,
+                         capture=CAPTURE_NAME if captured else None)
+    if report_dir is not None:
+        from mavconform.reports.write import write_reports
+        write_reports(doc, report_dir)
+    return doc

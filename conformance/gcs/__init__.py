@@ -4,6 +4,6 @@
 clauses, clauses.py): a scripted vehicle (scripted_vehicle.py) answers as seed 000 says
 except where a check's script makes it drop, repeat, mistype or refuse, and an adapter
 (adapters.py) tells the GCS under test to upload, download, clear or set current, once
-per operation. checks.py decides each clause from what both sides did; mutants.py holds
+per operation. checks/ decides each clause from what both sides did; mutants.py holds
 the reference GCS with one behaviour broken per clause, the negative controls.
 """

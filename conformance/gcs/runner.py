@@ -10,13 +10,12 @@ would only cost time. An interrupt stops the run at the current clause, like the
 from __future__ import annotations
 
 import time
-import traceback
 from typing import Iterable
 
 from ..clause import Clause
 from ..harness.exchange import Exchange
-from ..outcome import ClauseFailed, ClauseResult, NotApplicable, Outcome, PreconditionFailed, Skipped, TargetUnresponsive
-from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, _text
+from ..outcome import ClauseResult, Outcome
+from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check
 from .checks import GCS_CHECKS
 from .harness import GcsHarness
 
@@ -73,29 +72,7 @@ def run_one(h: GcsHarness, clause: Clause) -> ClauseResult:
         return ClauseResult(clause.id, Outcome.ERROR, "no check is registered for this clause")
     begin = h.now()
     exchange = h.exchange = Exchange(begin)
-    caught: list = []
-    try:
-        outcome, detail = Outcome.PASS, fn(h) or ""
-        caught.append(detail)
-    except ClauseFailed as exc:
-        outcome, detail = Outcome.FAIL, _text(exc)
-        caught.append(exc)
-    except NotApplicable as exc:
-        outcome, detail = Outcome.NOT_APPLICABLE, _text(exc)
-        caught.append(exc)
-    except Skipped as exc:
-        outcome, detail = Outcome.SKIPPED, _text(exc)
-        caught.append(exc)
-    except PreconditionFailed as exc:
-        outcome, detail = Outcome.ERROR, f"precondition: {exc}"
-        caught.append(exc)
-    except TargetUnresponsive as exc:
-        outcome, detail = Outcome.ERROR, f"target unresponsive: {exc}"
-        caught.append(exc)
-    except Exception as exc:   # a bug in the check: ours, never the GCS's failure
-        where = traceback.extract_tb(exc.__traceback__)[-1]
-        outcome, detail = Outcome.ERROR, (f"internal error in check {fn.__name__}: "
-                                          f"{type(exc).__name__}: {exc} ({where.filename}:{where.lineno})")
+    outcome, detail, caught = call_check(fn, h)
     decided_by = exchange.decided_by if outcome in (Outcome.PASS, Outcome.FAIL) else None
     end = h.now()
     h.exchange = None

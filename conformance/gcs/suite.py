@@ -20,14 +20,14 @@ from typing import Any
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net.capture import McapCapture
 
-from .. import catalogue, document, expectations, gating
+from .. import catalogue, document, expectations
 from ..clause import Clause, Role
 from ..runner import InterruptGuard, OnResult, RunOutcome
+from ..suite import CAPTURE_NAME, checked_outputs, conclude, judged_live
 from .adapters import CommandAdapter, GcsAdapter, NodeAdapter
 from .harness import GcsHarness
 from .runner import run_gcs_clauses
 
-CAPTURE_NAME = "run.mcap"
 BUILTIN = "builtin:gcs"
 MUTANT_PREFIX = "gcs-mutant:"
 TARGET_FORMS = f"{BUILTIN} (the reference GCS) or {MUTANT_PREFIX}NAME (`mavconform clauses --mutants`)"
@@ -72,18 +72,7 @@ def prepare(options: document.RunOptions, *, target: str | None, command: str | 
     clauses = catalogue.select(options.clauses, levels, role=Role.GCS)
     if not clauses:
         raise UsageError(f"no GCS clause matches --clauses {options.clauses!r} with --level {levels!r}")
-    expected = expectations.load(options.expectations) if options.expectations else {}
-    baseline = None
-    if options.baseline:
-        from mavconform.reports.run_document import load_run
-        baseline = gating.baseline_outcomes(load_run(options.baseline), options.baseline)
-    out = None
-    if report_dir is not None:
-        out = Path(report_dir)
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise UsageError(f"cannot create report folder {str(out)!r}: {exc.strerror}") from None
+    expected, baseline, out = checked_outputs(options, report_dir)
     workdir = (out / "gcs-jobs") if out is not None else Path(tempfile.mkdtemp(prefix="mavconform-gcs-"))
     adapter = gcs_adapter(target, command, workdir)
     return PreparedGcs(options, adapter, clauses, expected, baseline, out, timeout_s)
@@ -94,13 +83,7 @@ def execute(p: PreparedGcs, *, virtual: bool = False, on_result: OnResult | None
     """Run the prepared GCS clauses; return the run document (reports written if asked).
     `virtual`: in virtual time (an in-process GCS only; the tool's own tests)."""
     started = dt.datetime.now(dt.timezone.utc)
-    if p.expected:
-        shown = on_result
-
-        def on_result(clause: Clause, result: Any) -> None:
-            gating.apply_expectations([result], p.expected)
-            if shown is not None:
-                shown(clause, result)
+    on_result = judged_live(on_result, p.expected)
     with InterruptGuard(stop_signals) as guard:
         capture = None
         if p.report_dir is not None and not virtual:
@@ -113,13 +96,8 @@ def execute(p: PreparedGcs, *, virtual: bool = False, on_result: OnResult | None
             guard.hold()
             if capture is not None:
                 capture.close()
-        gating.apply_expectations(run.results, p.expected)
-        flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
-        doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,
-                             capture=CAPTURE_NAME if capture is not None else None)
-        if p.report_dir is not None:
-            from mavconform.reports.write import write_reports
-            write_reports(doc, p.report_dir)
+        doc = conclude(p.options, run, p.expected, p.baseline, p.report_dir, started=started,
+                       captured=capture is not None)
     if guard.received and not run.interrupted:
         run.late_signal = guard.first
     return doc, run

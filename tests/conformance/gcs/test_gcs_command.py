@@ -14,7 +14,7 @@ import pytest
 
 from mavconform.cli import main
 from mavconform.conformance.gcs.adapters import CommandAdapter, parse_command
-from mavconform.conformance.gcs.checks import _plan
+from mavconform.conformance.gcs.checks.common import plan_of
 from mavconform.conformance.gcs.harness import GcsHarness
 from mavconform.conformance.gcs.job import Job, read_job, read_result, write_job
 from mavconform.conformance.gcs.runner import run_gcs_clauses
@@ -33,7 +33,7 @@ def _python(script: str | Path, *args: str) -> str:
 
 
 def test_a_job_survives_its_file(tmp_path: Path) -> None:
-    job = Job("upload", MissionType.MISSION, tuple(_plan()), timeout_s=12.0)
+    job = Job("upload", MissionType.MISSION, tuple(plan_of()), timeout_s=12.0)
     write_job(job, tmp_path / "job.json", tmp_path / "result.json")
     back, result = read_job(tmp_path / "job.json")
     assert back == job and result == tmp_path / "result.json"

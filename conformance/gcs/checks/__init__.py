@@ -1,0 +1,38 @@
+"""The GCS checks: one function per MIS.G clause, registered by the clause id it decides.
+
+A check gets the `GcsHarness` (its `run` has the GCS do one operation against a scripted
+vehicle) and returns a short text when the GCS met the clause; it raises `ClauseFailed` saying
+what the GCS did instead, or `PreconditionFailed` when the GCS never led the vehicle to the
+move the clause is about (another clause judges that). Modules are grouped like the clauses;
+common.py holds the plans, the shared operations and the judging helpers. Importing this
+package registers them all.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Callable
+
+if TYPE_CHECKING:
+    from ..harness import GcsHarness
+
+Check = Callable[["GcsHarness"], "str | None"]
+GCS_CHECKS: dict[str, Check] = {}
+
+
+def check(clause_id: str) -> Callable[[Check], Check]:
+    def register(fn: Check) -> Check:
+        if clause_id in GCS_CHECKS:
+            raise ValueError(f"two checks for {clause_id}: {GCS_CHECKS[clause_id].__name__}, {fn.__name__}")
+        GCS_CHECKS[clause_id] = fn
+        return fn
+    return register
+
+
+def _load() -> None:
+    import importlib
+    import pkgutil
+    for info in pkgutil.iter_modules(__path__):
+        importlib.import_module(f"{__name__}.{info.name}")
+
+
+_load()
