@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 import struct
-from functools import lru_cache
 from typing import Any
 
 from hypothesis import strategies as st
@@ -38,6 +37,7 @@ from mavconform.reference_impl.mission.items import (
 )
 from mavconform.reference_impl.handover import control_messages as cm
 from mavconform.reference_impl.net import FaultModel
+from .seeded import cached_strategy_builder
 
 # --- valid plans (what the reference vehicle accepts) ------------------------------------
 
@@ -243,7 +243,7 @@ _EXACT_XY = {   # (kind, axis) -> (largest magnitude, 2^m)
 }
 
 
-@lru_cache(maxsize=None)
+@cached_strategy_builder
 def exact_xy(kind: str, axis: str) -> st.SearchStrategy[float]:
     """In-range x or y of an item of `kind` whose conversion to the int form is exact."""
     limit, denominator = _EXACT_XY[(kind, axis)]
@@ -258,7 +258,7 @@ _FEW_PARAMS_Z = st.lists(st.sampled_from(_PARAMS_Z), max_size=2, unique=True)
 _ANY_PARAMS_Z = st.lists(st.sampled_from(_PARAMS_Z), max_size=5, unique=True)
 
 
-@lru_cache(maxsize=None)   # drawn from inside composites: build each strategy once
+@cached_strategy_builder   # drawn from inside composites: build each strategy once
 def float_xy(kind: str, axis: str) -> st.SearchStrategy[float]:
     """What a MISSION_ITEM may carry in x or y for an item of `kind`: out-of-range values,
     in-range ones the vehicle converts exactly, values just past the valid range, the float32

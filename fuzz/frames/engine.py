@@ -26,6 +26,7 @@ from mavconform.conformance.target_uri import TargetUri, parse_target
 from mavconform.fuzz.case import LINK_LATENCY, Case, Violation, case_latency
 from mavconform.fuzz.outcomes import (SearchInterrupted, TargetUnresponsive, ToolError, ToolFailure,
                                       caused_by_interrupt)
+from mavconform.fuzz.seeded import seeded_hypothesis
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
@@ -182,7 +183,8 @@ class FrameCampaign:
         example._hypothesis_internal_database_key = (  # type: ignore[attr-defined]
             f"mavconform-frames/{self.target}/{self.seed}".encode())
         try:
-            example()
+            with seeded_hypothesis(virtual_time=self.virtual):
+                example()
             if self.failure is not None:
                 raise ToolError(self.failure)
         except _Found as exc:

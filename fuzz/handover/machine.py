@@ -26,6 +26,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import seed as hypothesis_seed
 from hypothesis import strategies as st
 
+from ..seeded import seeded_hypothesis
 from .properties import Judge, Report
 from .world import BEHAVIOURS, MEDDLES, SCENARIOS, Behaviour, FlightCase, Link, World, fly
 
@@ -141,7 +142,8 @@ def campaign(examples: int, seed: int = 0, *, vehicle_factory: Any = None, shrin
 
     started = time.monotonic()
     try:
-        one()
+        with seeded_hypothesis(virtual_time=True):
+            one()
     except PropertyViolated as finding:
         result.failure = str(finding)
     result.wall_s = time.monotonic() - started

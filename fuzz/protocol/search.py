@@ -30,10 +30,8 @@ is handed over, shrunk as far as Hypothesis got.
 from __future__ import annotations
 
 import hashlib
-import sys
 import time
-from contextlib import contextmanager
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 from hypothesis import HealthCheck, Phase, Verbosity, settings
 from hypothesis.database import ExampleDatabase
@@ -45,6 +43,7 @@ from mavconform.reference_impl.net.sim import CaptureHook, stable_seed
 
 from ..case import LINK_LATENCY, Case, Violation, case_latency
 from ..outcomes import SearchInterrupted, ToolError, caused_by_interrupt, raised_while_handling
+from ..seeded import seeded_hypothesis
 from .connection import TargetConnection
 from .machine import CampaignOver, CampaignState, Finding, Knobs, machine_class
 from .steps import Runner
@@ -232,7 +231,7 @@ def _run_chunk(knobs: Knobs, seed: int, chunk: int, size: int, database: Example
         repr(("mavconform-protocol-fuzz/1", key)).encode()).digest()
     test._hypothesis_internal_use_seed = stable_seed("protocol", seed, chunk)
     try:
-        with _no_wall_clock_in_hypothesis(parse_target(knobs.target).in_process):
+        with seeded_hypothesis(virtual_time=parse_target(knobs.target).in_process):
             test()
     except BaseException as exc:   # noqa: BLE001 - sorted below: findings, or re-raised
         if caused_by_interrupt(exc):   # before CampaignOver: it may be what Hypothesis handled
@@ -267,36 +266,6 @@ def _split(exc: BaseException) -> tuple[list[Finding], list[BaseException]]:
             others += o
         return findings, others
     return [], [exc]
-
-
-class _FrozenMonotonic:
-    """`time` as Hypothesis's engine sees it, but with a monotonic clock that stands still."""
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(time, name)
-
-    @staticmethod
-    def monotonic() -> float:
-        return 0.0
-
-
-@contextmanager
-def _no_wall_clock_in_hypothesis(virtual: bool) -> Iterator[None]:
-    """With report_multiple_bugs, Hypothesis stops looking for more bugs 10 s of wall time
-    after the first (engine.should_generate_more): on a loaded machine a seeded in-process
-    campaign then ran fewer examples and found other cases. In virtual time nothing else
-    depends on the wall clock, so the engine's monotonic clock is held still there and the
-    same seed finds the same cases. (Its shrink limit uses perf_counter and stays real.) A
-    Hypothesis without that module attribute is left as it is."""
-    engine = sys.modules.get("hypothesis.internal.conjecture.engine")
-    if not virtual or engine is None or getattr(engine, "time", None) is not time:
-        yield
-        return
-    engine.time = _FrozenMonotonic()
-    try:
-        yield
-    finally:
-        engine.time = time
 
 
 def _smallest_per_invariant(findings: list[Finding]) -> list[Finding]:
