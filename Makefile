@@ -51,7 +51,7 @@ run-mavsdk: $(VENV)/.interop-installed  ## the suite vs MAVSDK's MissionRawServe
 # dependencies never meet ours; its adapter needs nothing of mavconform. MAVSDK is the interop
 # extra's wheel. The two clients run side by side: most of their time is waiting on timeouts.
 MAVPROXY_VENV := .venv-mavproxy
-GCS_TIMEOUT   := 12
+GCS_TIMEOUT   := 10
 GCS_CMD_MAVSDK   := $(BIN)/python tools/gcs_adapters/mavsdk_gcs.py {gcs_port} {op} {file}
 GCS_CMD_MAVPROXY := $(MAVPROXY_VENV)/bin/python tools/gcs_adapters/mavproxy_gcs.py {gcs_port} {op} {file}
 
