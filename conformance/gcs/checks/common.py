@@ -11,14 +11,16 @@ from dataclasses import replace
 from decimal import Decimal
 from typing import Any
 
+from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import MissionResult
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
 
 from ...harness import plans
+from ...harness.measured import Measured
 from ...outcome import ClauseFailed, PreconditionFailed
 from ..harness import GcsHarness, Operation
 from ..job import Job
-from ..scripted_vehicle import ITEMS, REQUESTS, Deaf, Event, named
+from ..scripted_vehicle import ITEMS, REQUESTS, Deaf, Event, Swap, named
 
 MISSION, FENCE, RALLY = MissionType.MISSION, MissionType.FENCE, MissionType.RALLY
 N = 3                           # items in the plans the checks move
@@ -163,7 +165,12 @@ def scripted(op: Operation, what: str, *names_: str, **fields: Any) -> Event:
                                  f"{names(mission_sent(op))} ({op.result.line()})")
     return event
 
-def ended_by(h: GcsHarness, op: Operation, code: MissionResult) -> str:
+def download_ended_by(h: GcsHarness, code: MissionResult) -> str:
+    """A download whose item 1 the vehicle answers with MISSION_ACK `code`: the GCS must send
+    nothing more for it and report it failed."""
+    op = h.run(download_job(), plans=stored(), after=WATCH_AFTER, rules=[Swap(
+        named(*ITEMS, seq=1), what=f"MISSION_ACK {code.name}",
+        instead=lambda reply, v: [m.ack_message(code, MISSION, v.target)])])
     ack = scripted(op, f"its {code.name}", "MISSION_ACK")
     later = op.after(ack, *REQUESTS, *ITEMS, "MISSION_REQUEST_LIST", "MISSION_COUNT")
     if later:
@@ -171,3 +178,14 @@ def ended_by(h: GcsHarness, op: Operation, code: MissionResult) -> str:
     require_failure(h, op, f"the vehicle answered with MISSION_ACK {code.name}")
     h.decide(op, ack)
     return f"nothing sent after {code.name}; {op.result.line()}"
+
+
+def resent(h: GcsHarness, op: Operation, sent: list[Event], what: str, unanswered: str) -> Measured:
+    """The clause holds when `what` went out again after `unanswered` (and the operation then
+    succeeded): `sent` is every copy the GCS sent, in order."""
+    if len(sent) < 2:
+        raise fail(h, op, sent[0] if sent else None, f"{what} was sent {len(sent)} time(s): never again "
+                                                     f"when {unanswered} ({op.result.line()})")
+    require_success(h, op, f"{what} was resent")
+    h.decide(op, sent[1])
+    return Measured(f"{what} resent after <s> s", s=f"{sent[1].t - sent[0].t:.3f}")

@@ -10,9 +10,9 @@ from ...outcome import ClauseFailed
 from ..harness import GcsHarness, Operation
 from ..scripted_vehicle import ITEMS, REQUESTS, Deaf, Event, Swap, named
 from . import check
-from .common import (MISSION, MISSION_NAMES, N, WATCH_AFTER, clean_download, download_job,
-                     ended_by, fail, first_told, mission_sent, names, plan_diff, plan_of,
-                     require_failure, require_success, scripted, short, stored)
+from .common import (MISSION, MISSION_NAMES, N, clean_download, download_ended_by, download_job,
+                     fail, first_told, mission_sent, names, plan_diff, plan_of, require_failure,
+                     require_success, resent, scripted, short, stored)
 
 
 @check("MIS.G.DN.01")
@@ -53,27 +53,14 @@ def requested_in_order(h: GcsHarness) -> str:
 @check("MIS.G.DN.03")
 def request_list_resent(h: GcsHarness) -> str:
     op = h.run(download_job(), plans=stored(), rules=[Deaf(named("MISSION_REQUEST_LIST"), what="the first MISSION_REQUEST_LIST")])
-    lists = op.sent("MISSION_REQUEST_LIST")
-    if len(lists) < 2:
-        raise fail(h, op, lists[0] if lists else None,
-                   f"MISSION_REQUEST_LIST was sent {len(lists)} time(s): never again when the vehicle did not "
-                   f"answer ({op.result.line()})")
-    require_success(h, op, "MISSION_REQUEST_LIST was resent")
-    h.decide(op, lists[1])
-    return Measured("MISSION_REQUEST_LIST resent after <s> s", s=f"{lists[1].t - lists[0].t:.3f}")
+    return resent(h, op, op.sent("MISSION_REQUEST_LIST"), "MISSION_REQUEST_LIST", "the vehicle did not answer")
 
 
 @check("MIS.G.DN.04")
 def item_request_resent(h: GcsHarness) -> str:
     op = h.run(download_job(), plans=stored(), rules=[Swap(named(*ITEMS, seq=1), what="item 1 lost")])
-    asked = [e for e in op.sent(*REQUESTS) if e.msg.seq == 1]
-    if len(asked) < 2:
-        raise fail(h, op, asked[0] if asked else None,
-                   f"item 1 was requested {len(asked)} time(s): never again when it did not come "
-                   f"({op.result.line()})")
-    require_success(h, op, "the request for item 1 was resent")
-    h.decide(op, asked[1])
-    return Measured("the request for item 1 was resent after <s> s", s=f"{asked[1].t - asked[0].t:.3f}")
+    return resent(h, op, [e for e in op.sent(*REQUESTS) if e.msg.seq == 1], "the request for item 1",
+                  "the item did not come")
 
 
 def _final_ack(h: GcsHarness, op: Operation, last: Event, what: str) -> Event:
@@ -129,10 +116,7 @@ def out_of_sequence_item(h: GcsHarness) -> str:
 
 @check("MIS.G.DN.08")
 def error_ack_ends_download(h: GcsHarness) -> str:
-    op = h.run(download_job(), plans=stored(), after=WATCH_AFTER, rules=[Swap(
-        named(*ITEMS, seq=1), what="MISSION_ACK ERROR",
-        instead=lambda reply, v: [m.ack_message(MissionResult.ERROR, MISSION, v.target)])])
-    return ended_by(h, op, MissionResult.ERROR)
+    return download_ended_by(h, MissionResult.ERROR)
 
 
 @check("MIS.G.DN.09")

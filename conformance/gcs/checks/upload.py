@@ -14,7 +14,7 @@ from ..scripted_vehicle import ITEMS, REQUESTS, Deaf, Swap, named
 from . import check
 from .common import (FLOAT_XY_SLACK, MISSION, MISSION_NAMES, N, REANSWER_WITHIN, WATCH_AFTER,
                      answer_after, clean_upload, fail, first_told, item_diff, mission_sent, names,
-                     require_failure, require_success, scripted, short, silent_to_count,
+                     require_failure, require_success, resent, scripted, short, silent_to_count,
                      upload_job)
 
 
@@ -106,13 +106,7 @@ def last_item_resent(h: GcsHarness) -> str:
 @check("MIS.G.UP.06")
 def count_resent(h: GcsHarness) -> str:
     op = h.run(upload_job(), rules=[Deaf(named("MISSION_COUNT"), what="the first MISSION_COUNT")])
-    counts = op.sent("MISSION_COUNT")
-    if len(counts) < 2:
-        raise fail(h, op, counts[0], f"MISSION_COUNT was sent once and never again when the vehicle did not "
-                                     f"answer ({op.result.line()})")
-    require_success(h, op, "MISSION_COUNT was resent")
-    h.decide(op, counts[1])
-    return Measured("MISSION_COUNT resent after <s> s", s=f"{counts[1].t - counts[0].t:.3f}")
+    return resent(h, op, op.sent("MISSION_COUNT"), "MISSION_COUNT", "the vehicle did not answer")
 
 
 @check("MIS.G.UP.07")
