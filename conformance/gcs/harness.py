@@ -56,10 +56,6 @@ class Operation:
     def _later(self, a: Event, b: Event) -> bool:
         return self.events.index(a) > self.events.index(b)
 
-    def at(self, event: Event) -> float:
-        """The event's time from the operation's start."""
-        return event.t - self.started
-
     def index(self, event: Event | None) -> int | None:
         return None if event is None else self.indices.get(id(event))
 
@@ -107,7 +103,7 @@ class GcsHarness:
                                          f"{result.said}")
             if result.ended and not result.ok:   # it said why: a refusal is its answer
                 raise ClauseFailed(f"the GCS would not {job.describe()}: it sent nothing ({result.line()})")
-            raise TargetUnresponsive(f"the GCS sent no mission message to {job.describe()} "
+            raise TargetUnresponsive(f"the GCS sent the vehicle nothing to {job.describe()} "
                                      f"({result.line()})")
         return op
 

@@ -21,7 +21,7 @@ speaks first, as SITL does to a ground station.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable
+from typing import Any, Callable
 
 from mavconform.reference_impl.endpoint import MavlinkEndpoint
 from mavconform.reference_impl.mission import messages as m
@@ -108,7 +108,6 @@ class ScriptedVehicle:
         self.log: list[Event] = []
         self.gcs: tuple[int, int] | None = None
         self.muted = False
-        self.current = 0
         self._upload: dict[str, Any] | None = None      # the upload being received
         self._finished: tuple[MissionType, int] | None = None   # the last upload completed
         self._later: list[tuple[float, Any]] = []
@@ -189,9 +188,6 @@ class ScriptedVehicle:
     def target(self) -> tuple[int, int]:
         return self.gcs or (255, 0)
 
-    def received(self, *names: str) -> list[Event]:
-        return [e for e in self.log if e.dir == "rx" and e.msg._type in names]
-
     # --- the vehicle side of the protocol -------------------------------------------------
     def _answer(self, msg: Any, peer: tuple[int, int]) -> list[Any]:
         name, to = msg._type, peer
@@ -250,7 +246,6 @@ class ScriptedVehicle:
                    ] if command is not None else []
         if not ok:
             return replies + [m.statustext_message(_d.MAV_SEVERITY_WARNING, f"set current {seq}: not in list")]
-        self.current = seq
         return replies + [m.current_message(seq, total, 0, 0, (0, 0, 0))]
 
     def _request(self, seq: int, mt: MissionType, to: tuple[int, int]) -> Any:
@@ -277,6 +272,3 @@ def _label(msg: Any) -> str:
     seq = getattr(msg, "seq", None)
     return msg._type + (f" {seq}" if seq is not None and msg._type != "HEARTBEAT" else "")
 
-
-def sent_names(events: Iterable[Event]) -> list[str]:
-    return [e.msg._type for e in events if e.msg is not None]
