@@ -120,8 +120,9 @@ def read_job(argv: list[str]) -> tuple[int, dict]:
     return int(port_text), job
 
 
-def write_result(job: dict, ok: bool, said: str, items: list | None = None) -> None:
-    result = {"ok": ok, "said": said}
+def write_result(job: dict, ok: bool, said: str, items: list | None = None, *, ended: bool = True) -> None:
+    """ended=False: MAVSDK never ended the operation by itself; the adapter stopped waiting."""
+    result = {"ok": ok, "said": said, "ended": ended}
     if items is not None:
         result["items"] = items
     tmp = job["result"] + ".tmp"
@@ -241,7 +242,8 @@ def run(port: int, job: dict, stop: threading.Event) -> int:
 
 
 def _gave_up(job: dict, name: str) -> int:
-    write_result(job, False, f"{name}: no result from MAVSDK within the job's timeout_s ({job['timeout_s']:g} s)")
+    write_result(job, False, f"{name}: no result from MAVSDK within the job's timeout_s ({job['timeout_s']:g} s)",
+                 ended=False)
     return 1
 
 
