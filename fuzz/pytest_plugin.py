@@ -4,8 +4,10 @@
 
 Registered as a pytest11 entry point; it only adds options until `--fuzz-target` is given.
 Each test is one shard of a campaign: a mode and a shard number, whose seed is derived from
-`--fuzz-seed` and the shard, so shards explore different examples and the whole fleet is
-reproducible. All shards share one Hypothesis example database (`--fuzz-database`, a
+`--fuzz-seed` and the shard, so shards explore different examples. A shard's finding is saved
+as a case that replays exactly; the examples a shard explores can differ with the example
+database and, in a worker that already ran other shards, with what Hypothesis kept from them
+(fuzz/seeded.py). All shards share one Hypothesis example database (`--fuzz-database`, a
 directory by default; Hypothesis's directory database is safe for concurrent processes), so
 an example one worker found is tried first by every later run. For machines that do not
 share a disk, `--fuzz-database redis://HOST:PORT` shares it through Redis.

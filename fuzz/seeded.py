@@ -21,7 +21,11 @@ campaign's Hypothesis runs:
   a loaded machine a campaign then ran fewer examples. Its monotonic clock is held still.
   (Its shrink limit uses perf_counter, five minutes, and stays real.)
 
-A Hypothesis without one of these module attributes is left as it is there.
+These are the causes found, not all there are: an xdist worker that had run many other tests
+was still once seen to explore other examples in a second same-seed search. What holds is the
+same seed in a fresh process, as `mavconform fuzz` runs a campaign (tests/fuzz/test_protocol.py
+checks it so); a finding replays from its saved case in any process. A Hypothesis without one
+of these module attributes is left as it is there.
 """
 
 from __future__ import annotations

@@ -12,6 +12,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import pytest
 
@@ -81,10 +83,33 @@ def test_the_saved_case_loads_and_replays_to_the_same_failure(non_atomic_finding
     assert replay(spec) is None
 
 
-def test_the_same_seed_gives_the_same_examples_and_findings(non_atomic_findings, monkeypatch):
-    again = search("mutant:non-atomic-upload", **SEARCH)
-    assert _same([(c.seed, c.steps, c.violation.__dict__) for c in again],
-                 [(c.seed, c.steps, c.violation.__dict__) for c in non_atomic_findings])
+# A same-seed search in a fresh process each time, as `mavconform fuzz --seed` runs one: a
+# process that has already run other searches (an xdist worker) was seen to explore other
+# examples (fuzz/seeded.py shuts out the causes found; see the note there).
+_FRESH_SEARCH = """
+import json, sys, time
+from mavconform.fuzz.protocol import search
+if sys.argv[1] == "slow":   # wall time jumping 30 s at every look
+    real, jumps = time.monotonic, [0.0]
+    def slow():
+        jumps[0] += 30.0
+        return real() + jumps[0]
+    time.monotonic = slow
+found = search("mutant:non-atomic-upload", seed=%(seed)d, max_examples=%(max_examples)d)
+print(json.dumps([(c.seed, c.steps, c.violation.__dict__) for c in found], sort_keys=True, default=repr))
+""" % SEARCH
+
+
+def _fresh_search(mode: str = "plain") -> str:
+    done = subprocess.run([sys.executable, "-c", _FRESH_SEARCH, mode], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+def test_the_same_seed_gives_the_same_examples_and_findings(monkeypatch):
+    first = _fresh_search()
+    assert first == _fresh_search()
+    assert json.loads(first)   # it found the planted bug
 
     def programs(seed: int) -> list[str]:
         """Every step every example ran, in order."""
@@ -223,19 +248,8 @@ def test_the_fuzzer_finds_the_crash_arducopter_sitl_had():
     assert replay(crash[0]).invariant == "target-crash"
 
 
-def test_a_slow_machine_finds_the_same_cases_for_the_same_seed(non_atomic_findings, monkeypatch):
+def test_a_slow_machine_finds_the_same_cases_for_the_same_seed():
     """Hypothesis stops hunting for more bugs 10 s of wall time after the first; a loaded CI
     machine used to cross that and find other cases. Wall time jumping 30 s at every look
     must change nothing in virtual time."""
-    import time as time_module
-    real = time_module.monotonic
-    jumps = [0.0]
-
-    def slow() -> float:
-        jumps[0] += 30.0
-        return real() + jumps[0]
-    monkeypatch.setattr(time_module, "monotonic", slow)
-    again = search("mutant:non-atomic-upload", **SEARCH)
-    monkeypatch.undo()
-    assert _same([(c.seed, c.steps, c.violation.__dict__) for c in again],
-                 [(c.seed, c.steps, c.violation.__dict__) for c in non_atomic_findings])
+    assert _fresh_search("slow") == _fresh_search()

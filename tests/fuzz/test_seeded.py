@@ -1,52 +1,18 @@
-"""A seeded campaign draws the same examples whatever the process did before it.
+"""While a campaign's Hypothesis runs, what the process did before cannot reach its draws.
 
-A CI run's determinism tests failed in an xdist worker that had run other tests between two
-same-seed searches. fuzz/seeded.py (its doc says how) keeps Hypothesis's local constants, its
-strategy cache and its clock out of a campaign's draws, for all three fuzzers (the frame and
-handover fuzzers open the same context around their Hypothesis runs). The first test checks
-that end to end; the second that each of the three is really shut out, and let back after.
+fuzz/seeded.py (its doc says why) keeps Hypothesis's local constants, its strategy cache and
+its clock out of a campaign's runs, for all three fuzzers. This checks that each is really
+shut out inside, and let back after. That the same seed then finds the same cases, in fresh
+processes as `mavconform fuzz --seed` runs them, is tests/fuzz/test_protocol.py's.
 """
 
 from __future__ import annotations
 
-import importlib
-import json
 import time
 
-import pytest
 from hypothesis import strategies as st
 
-from mavconform.fuzz.protocol import machine as machine_module
-from mavconform.fuzz.protocol import search
-from mavconform.fuzz.protocol.steps import Runner
 from mavconform.fuzz.seeded import seeded_hypothesis
-
-
-@pytest.fixture
-def programs(monkeypatch):
-    """Every step a protocol search of `seed` ran, in order."""
-    ran: list[str] = []
-
-    class Recording(Runner):
-        def apply(self, step):
-            ran.append(json.dumps(step, sort_keys=True))
-            return super().apply(step)
-
-    monkeypatch.setattr(machine_module, "Runner", Recording)
-
-    def run(seed: int, examples: int = 30) -> list[str]:
-        ran.clear()
-        assert search("builtin:spec", seed=seed, max_examples=examples) == []
-        return list(ran)
-    return run
-
-
-def test_a_search_runs_the_same_programs_after_other_searches_and_imports(programs) -> None:
-    first = programs(8)
-    programs(1, examples=5)
-    importlib.import_module("mavconform.conformance.gcs.checks")   # more local modules, more constants
-    importlib.import_module("mavconform.fuzz.handover.machine")
-    assert programs(8) == first
 
 
 def test_inside_a_campaign_hypothesis_has_no_local_constants_no_carried_strategies_no_clock() -> None:
