@@ -61,7 +61,12 @@ def checked_outputs(options: document.RunOptions, report_dir: str | Path | None
     baseline = None
     if options.baseline:
         from mavconform.reports.run_document import load_run
-        baseline = gating.baseline_outcomes(load_run(options.baseline), options.baseline)
+        earlier = load_run(options.baseline)
+        role = earlier["run"].get("role", "vehicle")
+        if role != options.role:
+            raise UsageError(f"--baseline {options.baseline}: a run of the {role} clauses; this run is "
+                             f"of the {options.role}'s")
+        baseline = gating.baseline_outcomes(earlier, options.baseline)
     out = None
     if report_dir is not None:
         out = Path(report_dir)

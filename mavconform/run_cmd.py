@@ -10,7 +10,8 @@ clause's script drops, repeats, mistypes or refuses, and the GCS is told to uplo
 clear or set current once per operation. The GCS under test is --target builtin:gcs (the
 reference GCS, the default), gcs-mutant:NAME, or a command run per operation:
   --gcs-cmd 'CMD {port} {op} {file}'
-where {port} is the scripted vehicle's UDP port on 127.0.0.1 (the GCS sends first), {op} is
+where {port} is the scripted vehicle's UDP port on 127.0.0.1 (the GCS sends first; or
+{gcs_port}: a free port on 127.0.0.1 the GCS listens on, the vehicle sending first), {op} is
 upload, download, clear or set-current, and {file} a JSON job file naming the plan type, the
 items (upload), the item (set-current) and where to write the result ({type} and {seq} are
 there too). The command exits 0 when the GCS reported success; it is killed after
@@ -143,7 +144,8 @@ def _run_gcs(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
                                       ("--allow-flight", args.allow_flight), ("--no-restore", args.no_restore),
                                       ("--time-scale", args.time_scale != 1.0)) if value]
     if given:
-        raise UsageError(f"{given[0]} is for --role vehicle; a GCS run has no vehicle of its own to fly or restore")
+        raise UsageError(f"{given[0]} is for --role vehicle (a GCS run has no vehicle of its own to fly, "
+                         "restore or slow down; its bound is --gcs-timeout)")
     target = f"cmd:{args.gcs_cmd}" if args.gcs_cmd is not None else (args.target or gcs_suite.BUILTIN)
     options = document.RunOptions(target=target, clauses=args.clauses, strict=args.strict, seed=args.seed,
                                   expectations=args.expect, baseline=args.baseline, role="gcs")

@@ -128,6 +128,15 @@ def test_gcs_usage_mistakes_get_one_line_and_exit_2(argv, message, capsys, tmp_p
     assert len(err) == 1 and message in err[0], err
 
 
+def test_a_baseline_of_the_other_role_is_refused(tmp_path: Path, capsys) -> None:
+    gcs_run = tmp_path / "gcs"
+    assert main(["run", "--role", "gcs", "--clauses", "MIS.G.UP.01", "--report-dir", str(gcs_run), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["run", "--clauses", "MIS.UP.01", "--baseline", str(gcs_run / "run.json"),
+                 "--report-dir", str(tmp_path / "v")]) == 2
+    assert "a run of the gcs clauses; this run is of the vehicle's" in capsys.readouterr().err
+
+
 def test_a_gcs_mutant_run_writes_reports_that_name_the_role(tmp_path: Path) -> None:
     code = main(["run", "--role", "gcs", "--target", "gcs-mutant:no-final-ack", "--clauses", "MIS.G.DN.05",
                  "--report-dir", str(tmp_path), "-q"])
