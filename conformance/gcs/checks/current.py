@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from mavconform.reference_impl.mission.constants import Cmd
+
 from ...harness import plans
 from ...outcome import ClauseFailed, PreconditionFailed
 from ..harness import GcsHarness, Operation
@@ -24,7 +26,7 @@ def _set_current(h: GcsHarness) -> Operation:
 
 def _set_current_messages(op: Operation) -> list[Event]:
     return [e for e in op.sent("MISSION_SET_CURRENT", "COMMAND_LONG")
-            if e.msg._type == "MISSION_SET_CURRENT" or e.msg.command == 224]
+            if e.msg._type == "MISSION_SET_CURRENT" or e.msg.command == Cmd.DO_SET_MISSION_CURRENT]
 
 
 def _seq_of(msg: Any) -> int:
@@ -37,7 +39,7 @@ def set_current_sent(h: GcsHarness) -> str:
     sent = _set_current_messages(op)
     if not sent:
         raise fail(h, op, None, f"set-current sent {names(mission_sent(op))}: neither MISSION_SET_CURRENT nor "
-                                        "MAV_CMD_DO_SET_MISSION_CURRENT")
+                                "MAV_CMD_DO_SET_MISSION_CURRENT")
     h.decide(op, sent[0])
     if _seq_of(sent[0].msg) != SET_CURRENT_SEQ:
         raise ClauseFailed(f"{sent[0].msg._type} names item {_seq_of(sent[0].msg)}, not {SET_CURRENT_SEQ}")
