@@ -93,6 +93,14 @@ def mission_sent(op: Operation) -> list[Event]:
     return [e for e in op.sent() if e.msg._type.startswith("MISSION_")]
 
 
+def first_mission_message(h: GcsHarness, op: Operation) -> Event:
+    """The first Mission Protocol message the GCS sent: what an operation must start with."""
+    sent = mission_sent(op)
+    if not sent:
+        raise fail(h, op, None, f"the GCS sent no mission message ({op.result.line()})")
+    return sent[0]
+
+
 def names(events: list[Event]) -> str:
     shown = ", ".join(short(e.msg) for e in events[:8])
     return (shown + (", ..." if len(events) > 8 else "")) or "nothing"

@@ -11,17 +11,14 @@ from ..harness import GcsHarness, Operation
 from ..scripted_vehicle import ITEMS, REQUESTS, Deaf, Event, Swap, named
 from . import check
 from .common import (MISSION, MISSION_NAMES, N, clean_download, download_ended_by, download_job,
-                     fail, first_told, mission_sent, names, plan_diff, plan_of, require_failure,
-                     require_success, resent, scripted, short, stored)
+                     fail, first_mission_message, first_told, names, plan_diff, plan_of,
+                     require_failure, require_success, resent, scripted, short, stored)
 
 
 @check("MIS.G.DN.01")
 def request_list_first(h: GcsHarness) -> str:
     op = clean_download(h)
-    sent = mission_sent(op)
-    if not sent:
-        raise fail(h, op, None, f"the GCS sent no mission message ({op.result.line()})")
-    first = sent[0]
+    first = first_mission_message(h, op)
     h.decide(op, first)
     if first.msg._type != "MISSION_REQUEST_LIST" or first.msg.mission_type != MISSION:
         raise ClauseFailed(f"the download began with {short(first.msg)}"

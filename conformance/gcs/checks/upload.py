@@ -13,20 +13,17 @@ from ..job import Job
 from ..scripted_vehicle import ITEMS, REQUESTS, Deaf, Swap, named
 from . import check
 from .common import (FLOAT_XY_SLACK, MISSION, MISSION_NAMES, N, REANSWER_WITHIN, WATCH_AFTER,
-                     answer_after, clean_upload, fail, first_told, item_diff, mission_sent, names,
-                     require_failure, require_success, resent, scripted, short, silent_to_count,
-                     upload_job)
+                     answer_after, clean_upload, fail, first_mission_message, first_told,
+                     item_diff, mission_sent, names, require_failure, require_success, resent,
+                     scripted, short, silent_to_count, upload_job)
 
 
 @check("MIS.G.UP.01")
 def count_first(h: GcsHarness) -> str:
     op = clean_upload(h)
-    sent = mission_sent(op)
-    if not sent:
-        raise fail(h, op, None, f"the GCS sent no mission message ({op.result.line()})")
-    first = sent[0]
+    first = first_mission_message(h, op)
     if first.msg._type != "MISSION_COUNT":
-        raise fail(h, op, first, f"the upload began with {names(sent[:1])}, not MISSION_COUNT")
+        raise fail(h, op, first, f"the upload began with {names([first])}, not MISSION_COUNT")
     h.decide(op, first)
     if first.msg.count != N or first.msg.mission_type != MISSION:
         raise ClauseFailed(f"MISSION_COUNT count {first.msg.count} mission_type {first.msg.mission_type}; "
