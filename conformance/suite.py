@@ -13,10 +13,11 @@ import math
 import signal
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net.capture import McapCapture
+from mavconform.reference_impl.net.sim import CaptureHook
 
 from . import catalogue, document, expectations, gating
 from .clause import Clause
@@ -87,36 +88,55 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
     target's plans are still put back and every report written, a second signal cannot cut
     that short, and the outcome says it was interrupted (or, in `late_signal`, that a signal
     came while that was being done)."""
-    started = dt.datetime.now(dt.timezone.utc)
-    on_result = judged_live(on_result, p.expected)
-    with InterruptGuard(stop_signals) as guard:
-        capture = None
-        if p.report_dir is not None:
-            capture = McapCapture(p.report_dir / CAPTURE_NAME)
+    def clauses(guard: InterruptGuard, capture: CaptureHook | None, on_result: OnResult | None) -> RunOutcome:
         try:
-            try:
-                with Session(p.uri, scale=p.options.time_scale, virtual=virtual, seed=p.options.seed,
-                             allow_flight=allow_flight,
-                             capture=guard.atomic(capture) if capture is not None else None) as session:
-                    run = run_clauses(session, p.clauses, on_result=on_result, restore=restore, guard=guard)
-                    if session.guard is not None and session.guard.crash:
-                        run.restore = {**run.restore, "detail": run.restore["detail"]
-                                       + f"; the in-process vehicle crashed: {session.guard.crash}"}
-            except KeyboardInterrupt:   # before the session was open: nothing was sent
-                guard.hold()
-                run = interrupted_before_start(p.clauses, guard.first, on_result)
+            with Session(p.uri, scale=p.options.time_scale, virtual=virtual, seed=p.options.seed,
+                         allow_flight=allow_flight, capture=capture) as session:
+                run = run_clauses(session, p.clauses, on_result=on_result, restore=restore, guard=guard)
+                if session.guard is not None and session.guard.crash:
+                    run.restore = {**run.restore, "detail": run.restore["detail"]
+                                   + f"; the in-process vehicle crashed: {session.guard.crash}"}
+                return run
+        except KeyboardInterrupt:   # before the session was open: nothing was sent
+            guard.hold()
+            return interrupted_before_start(p.clauses, guard.first, on_result)
+    return guarded_run(p.options, p.expected, p.baseline, p.report_dir, clauses, on_result=on_result,
+                       stop_signals=stop_signals, capture=True)
+
+
+def guarded_run(options: document.RunOptions, expected: dict[str, expectations.Deviation],
+                baseline: dict[str, str] | None, report_dir: Path | None,
+                clauses: Callable[[InterruptGuard, CaptureHook | None, OnResult | None], RunOutcome], *,
+                on_result: OnResult | None, stop_signals: tuple[int, ...], capture: bool,
+                ) -> tuple[dict[str, Any], RunOutcome]:
+    """What every run does around its clauses, whichever side it tests: under an
+    `InterruptGuard`, with the MCAP capture (if `capture` and a report folder), each result
+    judged against the expectations as it comes; then the run judged, its document built and
+    its reports written, and a signal that came meanwhile noted in `late_signal`.
+    `clauses(guard, capture_hook, on_result)` runs them."""
+    started = dt.datetime.now(dt.timezone.utc)
+    on_result = _judged_live(on_result, expected)
+    with InterruptGuard(stop_signals) as guard:
+        mcap = McapCapture(report_dir / CAPTURE_NAME) if capture and report_dir is not None else None
+        try:
+            run = clauses(guard, guard.atomic(mcap) if mcap is not None else None, on_result)
         finally:
             guard.hold()
-            if capture is not None:
-                capture.close()
-        doc = conclude(p.options, run, p.expected, p.baseline, p.report_dir, started=started,
-                       captured=capture is not None)
+            if mcap is not None:
+                mcap.close()
+        gating.apply_expectations(run.results, expected)
+        flags, summary = gating.gate(run.results, strict=options.strict, baseline=baseline)
+        doc = document.build(options, run, started=started, gating_flags=flags, gating=summary,
+                             capture=CAPTURE_NAME if mcap is not None else None)
+        if report_dir is not None:
+            from mavconform.reports.write import write_reports
+            write_reports(doc, report_dir)
     if guard.received and not run.interrupted:
         run.late_signal = guard.first
     return doc, run
 
 
-def judged_live(on_result: OnResult | None, expected: dict[str, expectations.Deviation]) -> OnResult | None:
+def _judged_live(on_result: OnResult | None, expected: dict[str, expectations.Deviation]) -> OnResult | None:
     """`on_result` with each result judged against the expectations as it comes, so the live
     line already says KNOWN (or "deviation no longer observed"), as the reports will."""
     if not expected:
@@ -128,16 +148,3 @@ def judged_live(on_result: OnResult | None, expected: dict[str, expectations.Dev
             on_result(clause, result)
     return judged
 
-
-def conclude(options: document.RunOptions, run: RunOutcome, expected: dict[str, expectations.Deviation],
-             baseline: dict[str, str] | None, report_dir: Path | None, *, started: dt.datetime,
-             captured: bool) -> dict[str, Any]:
-    """Judge the run (expectations, then gating) and build its document; write the reports."""
-    gating.apply_expectations(run.results, expected)
-    flags, summary = gating.gate(run.results, strict=options.strict, baseline=baseline)
-    doc = document.build(options, run, started=started, gating_flags=flags, gating=summary,
-                         capture=CAPTURE_NAME if captured else None)
-    if report_dir is not None:
-        from mavconform.reports.write import write_reports
-        write_reports(doc, report_dir)
-    return doc

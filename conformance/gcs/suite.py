@@ -9,7 +9,6 @@ vehicle run's own (conformance/document.py, gating.py, reports/).
 
 from __future__ import annotations
 
-import datetime as dt
 import math
 import signal
 import tempfile
@@ -18,12 +17,12 @@ from pathlib import Path
 from typing import Any
 
 from mavconform.reference_impl.errors import UsageError
-from mavconform.reference_impl.net.capture import McapCapture
+from mavconform.reference_impl.net.sim import CaptureHook
 
 from .. import catalogue, document, expectations
 from ..clause import Clause, Role
 from ..runner import InterruptGuard, OnResult, RunOutcome
-from ..suite import CAPTURE_NAME, checked_outputs, conclude, judged_live
+from ..suite import checked_outputs, guarded_run
 from .adapters import CommandAdapter, GcsAdapter, NodeAdapter
 from .harness import GcsHarness
 from .runner import run_gcs_clauses
@@ -82,22 +81,9 @@ def execute(p: PreparedGcs, *, virtual: bool = False, on_result: OnResult | None
             stop_signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> tuple[dict[str, Any], RunOutcome]:
     """Run the prepared GCS clauses; return the run document (reports written if asked).
     `virtual`: in virtual time (an in-process GCS only; the tool's own tests)."""
-    started = dt.datetime.now(dt.timezone.utc)
-    on_result = judged_live(on_result, p.expected)
-    with InterruptGuard(stop_signals) as guard:
-        capture = None
-        if p.report_dir is not None and not virtual:
-            capture = McapCapture(p.report_dir / CAPTURE_NAME)
-        try:
-            harness = GcsHarness(p.adapter, real_time=not virtual, timeout_s=p.timeout_s, seed=p.options.seed,
-                                 capture=guard.atomic(capture) if capture is not None else None)
-            run = run_gcs_clauses(harness, p.clauses, on_result=on_result, guard=guard)
-        finally:
-            guard.hold()
-            if capture is not None:
-                capture.close()
-        doc = conclude(p.options, run, p.expected, p.baseline, p.report_dir, started=started,
-                       captured=capture is not None)
-    if guard.received and not run.interrupted:
-        run.late_signal = guard.first
-    return doc, run
+    def clauses(guard: InterruptGuard, capture: CaptureHook | None, on_result: OnResult | None) -> RunOutcome:
+        harness = GcsHarness(p.adapter, real_time=not virtual, timeout_s=p.timeout_s, seed=p.options.seed,
+                             capture=capture)
+        return run_gcs_clauses(harness, p.clauses, on_result=on_result, guard=guard)
+    return guarded_run(p.options, p.expected, p.baseline, p.report_dir, clauses, on_result=on_result,
+                       stop_signals=stop_signals, capture=not virtual)
