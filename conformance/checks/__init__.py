@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Callable
 
+from ..registry import checks_by_clause, import_submodules
+
 if TYPE_CHECKING:
     from ..session import Session
 
@@ -18,21 +20,5 @@ Check = Callable[["Session"], "str | None"]
 CHECKS: dict[str, Check] = {}
 
 
-def check(clause_id: str) -> Callable[[Check], Check]:
-    def register(fn: Check) -> Check:
-        if clause_id in CHECKS:
-            raise ValueError(f"two checks for {clause_id}: {CHECKS[clause_id].__name__}, {fn.__name__}")
-        CHECKS[clause_id] = fn
-        fn.clause_id = clause_id  # type: ignore[attr-defined]
-        return fn
-    return register
-
-
-def _load() -> None:
-    import importlib
-    import pkgutil
-    for info in pkgutil.iter_modules(__path__):
-        importlib.import_module(f"{__name__}.{info.name}")
-
-
-_load()
+check = checks_by_clause(CHECKS)
+import_submodules(__path__, __name__)

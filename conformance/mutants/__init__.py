@@ -17,6 +17,8 @@ from mavconform.reference_impl.mission.behaviour import ServerBehaviour
 from mavconform.reference_impl.mission.server import MissionServer
 from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
+from ..registry import import_submodules
+
 
 @dataclass(frozen=True)
 class Mutant:
@@ -58,14 +60,7 @@ def vehicle_mutant(vehicle_cls: type[VehicleNode], **config: Any) -> Callable[[V
     return build
 
 
-def _load() -> None:
-    import importlib
-    import pkgutil
-    for info in pkgutil.iter_modules(__path__):
-        importlib.import_module(f"{__name__}.{info.name}")
-
-
-_load()
+import_submodules(__path__, __name__)
 
 __all__ = ["MUTANTS", "Mutant", "mutant", "server_mutant", "knob_mutant", "vehicle_mutant",
            "ServerBehaviour"]

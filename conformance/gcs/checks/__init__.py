@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Callable
 
+from ...registry import checks_by_clause, import_submodules
+
 if TYPE_CHECKING:
     from ..harness import GcsHarness
 
@@ -19,20 +21,5 @@ Check = Callable[["GcsHarness"], "str | None"]
 GCS_CHECKS: dict[str, Check] = {}
 
 
-def check(clause_id: str) -> Callable[[Check], Check]:
-    def register(fn: Check) -> Check:
-        if clause_id in GCS_CHECKS:
-            raise ValueError(f"two checks for {clause_id}: {GCS_CHECKS[clause_id].__name__}, {fn.__name__}")
-        GCS_CHECKS[clause_id] = fn
-        return fn
-    return register
-
-
-def _load() -> None:
-    import importlib
-    import pkgutil
-    for info in pkgutil.iter_modules(__path__):
-        importlib.import_module(f"{__name__}.{info.name}")
-
-
-_load()
+check = checks_by_clause(GCS_CHECKS)
+import_submodules(__path__, __name__)
