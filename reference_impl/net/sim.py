@@ -26,6 +26,7 @@ from typing import Callable
 from .clock import SimClock
 from .faults import FaultModel, LinkStats
 from .node import Address, DatagramNode
+from .receive_queue import ReceiveQueue
 
 _INF = math.inf
 
@@ -107,6 +108,11 @@ class SimNetwork:
     def add_capture(self, hook: CaptureHook) -> None:
         """Call `hook(CaptureRecord)` for every tx, rx and drop from now on."""
         self._hooks.append(hook)
+
+    def receive_queue(self, node: DatagramNode) -> ReceiveQueue:
+        """As `UdpDriver.receive_queue`. A datagram is handed to its node when it is due, so
+        none waits in a queue and none is dropped there (a fault model's drops are the link's)."""
+        return ReceiveQueue(None, counted=True)
 
     # -- running ------------------------------------------------------------------------
 

@@ -8,6 +8,11 @@ Socket errors (ICMP port unreachable surfacing as ConnectionRefusedError, a full
 are what a bad peer or link does, so they are counted, never raised. A bind failure is the
 user's mistake (bad address, port in use): a one-line `UsageError`.
 
+What the kernel drops before we read it is ours, not the peer's: each socket gets a large
+receive buffer and, where the platform can count them, its drops (receive_queue.py);
+`receive_queue(node)` says both. Every wake-up reads what is waiting on each ready socket
+(bounded), so a busy peer is read as it sends.
+
 Fault RNGs are seeded from (seed, node index, direction), not the OS-chosen port, so the
 fault *decisions* repeat for a given seed even though real timing does not.
 """
@@ -26,6 +31,7 @@ from ..errors import UsageError
 from .clock import Clock, MonotonicClock
 from .faults import FaultModel, LinkStats
 from .node import Address, DatagramNode
+from .receive_queue import ANCILLARY_SPACE, ReceiveQueue, open_queue, resize
 from .sim import CaptureHook, CaptureRecord, stable_seed
 
 MAX_DATAGRAM = 65535
@@ -34,14 +40,15 @@ _SEND, _RECV = 0, 1
 
 
 class _Endpoint:
-    __slots__ = ("node", "sock", "address", "outgoing", "incoming", "rng_out", "rng_in")
+    __slots__ = ("node", "sock", "address", "outgoing", "incoming", "rng_out", "rng_in", "queue")
 
     def __init__(self, node: DatagramNode, sock: socket.socket, address: tuple[str, int],
                  outgoing: FaultModel | None, incoming: FaultModel | None,
-                 rng_out: random.Random, rng_in: random.Random) -> None:
+                 rng_out: random.Random, rng_in: random.Random, queue: ReceiveQueue) -> None:
         self.node, self.sock, self.address = node, sock, address
         self.outgoing, self.incoming = outgoing, incoming
         self.rng_out, self.rng_in = rng_out, rng_in
+        self.queue = queue
 
 
 class UdpDriver:
@@ -68,6 +75,7 @@ class UdpDriver:
         self._check_open()
         host, port = bind
         sock = socket.socket(_family(host), socket.SOCK_DGRAM)
+        queue = open_queue(sock)
         try:
             sock.bind((host, port))
         except (OSError, OverflowError) as exc:
@@ -81,13 +89,22 @@ class UdpDriver:
         index = len(self._endpoints)
         ep = _Endpoint(node, sock, address, outgoing, incoming,
                        random.Random(stable_seed(self.seed, index, "out")),
-                       random.Random(stable_seed(self.seed, index, "in")))
+                       random.Random(stable_seed(self.seed, index, "in")), queue)
         self._endpoints.append(ep)
         self._selector.register(sock, selectors.EVENT_READ, ep)
         return address  # type: ignore[return-value]
 
     def add_capture(self, hook: CaptureHook) -> None:
         self._hooks.append(hook)
+
+    def receive_queue(self, node: DatagramNode) -> ReceiveQueue:
+        """The receive queue of `node`'s socket: the buffer granted, the datagrams dropped."""
+        return self._endpoint(node).queue
+
+    def resize_receive_buffer(self, node: DatagramNode, wanted: int) -> int | None:
+        """Ask for a `wanted`-byte receive buffer on `node`'s socket; the size granted."""
+        ep = self._endpoint(node)
+        return resize(ep.sock, ep.queue, wanted)
 
     # -- running ------------------------------------------------------------------------
 
@@ -169,6 +186,12 @@ class UdpDriver:
         if self._closed:
             raise ValueError("UdpDriver is closed")
 
+    def _endpoint(self, node: DatagramNode) -> _Endpoint:
+        for ep in self._endpoints:
+            if ep.node is node:
+                return ep
+        raise ValueError(f"UdpDriver has no socket for {node!r}")
+
     def _link(self, src: Address, dst: Address) -> LinkStats:
         stats = self.stats.get((src, dst))
         if stats is None:
@@ -209,10 +232,18 @@ class UdpDriver:
             self._link(ep.address, dst).errors += 1
 
     def _drain(self, ep: _Endpoint, now: float) -> None:
-        """Read what is waiting on one socket (bounded) and pass it through incoming faults."""
+        """Read what is waiting on one socket (bounded) and pass it through incoming faults.
+        Where the kernel counts the socket's drops, each read takes its count along."""
+        sock, queue = ep.sock, ep.queue
+        counted = queue.drops is not None
         for _ in range(MAX_DRAIN):
             try:
-                data, addr = ep.sock.recvfrom(MAX_DATAGRAM)
+                if counted:
+                    data, ancillary, _, addr = sock.recvmsg(MAX_DATAGRAM, ANCILLARY_SPACE)
+                    if ancillary:
+                        queue.note(ancillary)
+                else:
+                    data, addr = sock.recvfrom(MAX_DATAGRAM)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError:  # e.g. a queued ICMP error from an earlier send
