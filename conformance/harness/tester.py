@@ -7,6 +7,10 @@ check passes are the protocol's own (spec defaults) and are stretched by `--time
 
 Frames are matched from a floor (`mark()` moves it to "now") and a matched frame is
 consumed, so two `expect`s of the same request see the first copy and then the retry.
+While a wait runs, each wake-up looks only at the frames that came since the last one
+(`_arrival`): a busy target's stream (hundreds of frames/s over a flight) scanned again
+from the floor at every datagram would cost the loop more than it has, and a loop that
+falls behind lets the kernel drop what the target sends.
 
 Each waiting helper also records which exchange event decided the clause, so the report
 marks the message the check judged: `expect`, `poll_for` and `collect` the last frame they
@@ -143,7 +147,7 @@ class Tester:
         within = self.reply_timeout if within is None else within * self.scale
         found = self._find(match)
         if found is None:
-            self.driver.run_until(lambda: self._find(match, peek=True) is not None, timeout=within)
+            self.driver.run_until(self._arrival(match), timeout=within)
             found = self._find(match)
         if found is None:
             self.decided_by = self.note(f"expected {match} within {within:g} s: nothing matching arrived")
@@ -160,7 +164,7 @@ class Tester:
         found = self._find(match)
         if found is None:
             started = self.now()
-            self.driver.run_until(lambda: self._find(match, peek=True) is not None, timeout=within)
+            self.driver.run_until(self._arrival(match), timeout=within)
             found = self._find(match)
             if forced:
                 self.forced_wait += self.now() - started
@@ -199,9 +203,11 @@ class Tester:
         end = start + for_ * self.scale
         quiet_s = None if quiet is None else quiet * self.scale
         out: list[tuple[float, Frame]] = []
+        cursor = [self._floor]   # frames before it were taken or can never match
 
         def take() -> bool:
-            for frame in self._take_all(match, stop):
+            frames, cursor[0] = self._take_all(match, stop, cursor[0])
+            for frame in frames:
                 out.append((self.now() - start, frame))
             if out and stop is not None and stop(out[-1][1]):
                 return True
@@ -215,7 +221,7 @@ class Tester:
             if take():
                 break
             wake = end if quiet_s is None or not out else min(end, start + out[-1][0] + quiet_s)
-            self.driver.run_until(lambda: self._pending(match, stop), timeout=max(0.0, wake - self.now()))
+            self.driver.run_until(self._arrival(match, stop, cursor[0]), timeout=max(0.0, wake - self.now()))
         self.forced_wait += self.now() - start
         if out:
             self.decided_by_frame(out[-1][1])
@@ -238,14 +244,35 @@ class Tester:
                 return frame
         return None
 
-    def _pending(self, match: Match, stop: Match | None) -> bool:
-        return self._find(match, peek=True) is not None or (
-            stop is not None and self._find(stop, peek=True) is not None)
+    def _arrival(self, match: Match, stop: Match | None = None,
+                 since: int | None = None) -> Callable[[], bool]:
+        """A wait's condition: whether an unconsumed frame of ours matching `match` (or
+        `stop`) has come since the floor (or `since`). Each call looks only at the frames that
+        came after the last call's: one that did not match then never will (a match is a
+        test of the frame alone, and nothing is consumed while the driver waits)."""
+        node, consumed, ours = self.node, self._consumed, self._ours
+        seen = self._floor if since is None else since
 
-    def _take_all(self, match: Match, stop: Match | None) -> list[Frame]:
+        def arrived() -> bool:
+            nonlocal seen
+            inbox = node.inbox
+            for i in range(seen, len(inbox)):
+                if i in consumed:
+                    continue
+                frame = inbox[i][1]
+                if ours(frame) and (match(frame) or (stop is not None and stop(frame))):
+                    seen = i
+                    return True
+            seen = len(inbox)
+            return False
+        return arrived
+
+    def _take_all(self, match: Match, stop: Match | None, since: int) -> tuple[list[Frame], int]:
+        """Consume every frame of ours from `since` on that matches `match` (up to and
+        including one that matches `stop`); and where the next look may start."""
         out = []
         inbox, consumed = self.node.inbox, self._consumed
-        for i in range(self._floor, len(inbox)):
+        for i in range(since, len(inbox)):
             if i in consumed:
                 continue
             frame = inbox[i][1]
@@ -256,8 +283,8 @@ class Tester:
                 self._used(frame)
                 out.append(frame)
                 if stop is not None and stop(frame):
-                    break
-        return out
+                    return out, i + 1
+        return out, len(inbox)
 
     def _ours(self, frame: Frame) -> bool:
         """Broadcast, or addressed to this tester's system: a reply to another GCS is not ours."""

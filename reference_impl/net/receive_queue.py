@@ -51,11 +51,12 @@ class ReceiveQueue:
                 self._raw = raw
 
 
-def open_queue(sock: socket.socket, wanted: int = RECEIVE_BUFFER) -> ReceiveQueue:
-    """Ask for a `wanted`-byte receive buffer and the drop counter on `sock`; say what the
-    kernel granted. A refusal is not an error: the socket works as it is, and says so."""
+def open_queue(sock: socket.socket, wanted: int | None = None) -> ReceiveQueue:
+    """Ask for a `wanted`-byte receive buffer (default `RECEIVE_BUFFER`) and the drop counter
+    on `sock`; say what the kernel granted. A refusal is not an error: the socket works as it
+    is, and says so."""
     try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, wanted)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER if wanted is None else wanted)
     except OSError:
         pass   # the system's default stays; `granted` reads it
     try:
