@@ -16,7 +16,10 @@ known system last verified there (per link, as MAVLink keys are shared by the tw
 link), so no GCS holds a key that signs what another GCS receives; an address no known
 system has spoken from gets the endpoint's own key, or unsigned frames. Every frame the
 signature policy drops is counted by its `Frame.authenticity` label in `rejections` and the
-last ones are kept in `rejected`, for logs and reports: a drop is never silent.
+last ones are kept in `rejected`, for logs and reports: a drop is never silent. Decode
+errors likewise: the last ones kept in `decode_errors`, every one counted by source address
+in `decode_error_counts` (a busy target sends more frames our dialect lacks than any kept
+list holds, and each is a frame of its packet sequence that we did not read).
 """
 
 from __future__ import annotations
@@ -75,6 +78,7 @@ class MavlinkEndpoint:
         self.addresses: dict[Address, None] = {}   # insertion-ordered set: broadcast targets
         self._configured: set[Address] = set()     # given by add_address: never forgotten
         self.decode_errors: deque[tuple[Address, DecodeError]] = deque(maxlen=MAX_KEPT_ERRORS)
+        self.decode_error_counts: Counter[Address] = Counter()   # every one, by source
         self.rejected_signatures = 0
         self.single_peer = single_peer
         self.locked_to: Address | None = None      # with single_peer: the one peer address
@@ -108,6 +112,7 @@ class MavlinkEndpoint:
         for item in self.decoder.feed(data):
             if item.__class__ is DecodeError:
                 self.decode_errors.append((source, item))
+                self.decode_error_counts[source] += 1
                 continue
             if (item.signature is not SignatureVerdict.UNSIGNED or self.require_signature) \
                     and not self._signature_acceptable(item):
