@@ -169,6 +169,7 @@ def _printer():
 
 def _summary(doc: dict[str, Any], report_dir: str) -> None:
     from mavconform.reports.run_document import run_facts
+    from mavconform.reports.text import dropped_text
     s = doc["summary"]
     ident, timing = doc["identity"], run_facts(doc)
     where = f" at {timing['address']}" if timing["address"] else ""
@@ -184,5 +185,8 @@ def _summary(doc: dict[str, Any], report_dir: str) -> None:
               + (f": {', '.join(gating['regressions'])}" if gating["regressions"] else "")
               + (f"; fixed since: {', '.join(gating['fixed'])}" if gating["fixed"] else ""))
     print(f"restore: {doc['restore']['status']}: {doc['restore']['detail']}")
+    dropped = dropped_text(doc)
+    if dropped is not None:
+        print(f"our receive queues: {dropped}")
     print(f"verdict: {s['verdict'].upper()} ({s['gating_failures']} clause(s) fail the run); "
           f"reports in {report_dir}/")

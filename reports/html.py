@@ -23,8 +23,8 @@ from mavconform.reports import run_document as rd
 from mavconform.reports.deciding import deciding_event, recorded_event
 from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
-from mavconform.reports.text import (clean, identity_text, interruption, one_line, seconds,
-                                     value_text, verdict_headline)
+from mavconform.reports.text import (clean, dropped_text, identity_text, interruption, one_line,
+                                     seconds, value_text, verdict_headline)
 
 OUTCOME_COLOURS = {"pass": "#1a7f37", "fail": "#cf222e", "known-deviation": "#9a6700",
                    "not-applicable": "#6e7781", "skipped": "#57606a", "error": "#8250df"}
@@ -209,6 +209,8 @@ def _fact_rows(doc: dict[str, Any]) -> list[tuple[str, str]]:
         facts.append(("duration", seconds(volatile["duration_s"])))
     if volatile.get("forced_wait_s") is not None:
         facts.append(("forced waits", seconds(volatile["forced_wait_s"])))
+    if dropped_text(doc) is not None:
+        facts.append(("our receive queues", dropped_text(doc)))
     keys = [k for k in _RUN_LABELS if k in run] + sorted(
         k for k in run if k not in _RUN_LABELS and k not in _SHOWN_APART)
     for key in keys:

@@ -29,7 +29,8 @@ import xml.etree.ElementTree as ET
 from typing import Any
 
 from mavconform.reports.run_document import (
-    ERROR, FAIL, KNOWN_DEVIATION, PASS, clause_detail, clause_duration, clause_events, run_facts,
+    ERROR, FAIL, KNOWN_DEVIATION, PASS, clause_detail, clause_duration, clause_events, receive_queue,
+    run_facts,
 )
 from mavconform.reports.text import clean, exchange_lines, interruption, one_line, value_text
 
@@ -101,6 +102,8 @@ def _properties(doc: dict[str, Any]) -> list[tuple[str, str]]:
     for key, value in sorted(run_facts(doc).items()):
         if value is not None:
             pairs.append((f"volatile.{key}", value if isinstance(value, str) else value_text(value)))
+    for key, value in sorted((receive_queue(doc) or {}).items()):   # null: not known
+        pairs.append((f"volatile.receive_queue.{key}", value_text(value)))
     gating = doc["gating"]
     pairs += [("gating.mode", gating["mode"]),
               ("gating.regressions", " ".join(gating["regressions"])),

@@ -14,8 +14,8 @@ from urllib.parse import quote
 
 from mavconform.reports.run_document import (OUTCOMES, PASS, clause_detail, outcome_counts,
                                              run_facts)
-from mavconform.reports.text import (document_identity, interruption, one_line, seconds,
-                                     verdict_headline)
+from mavconform.reports.text import (document_identity, dropped_text, interruption, one_line,
+                                     seconds, verdict_headline)
 
 DETAIL_LIMIT = 200  # characters of detail per table cell
 
@@ -52,6 +52,9 @@ def markdown_summary(doc: dict[str, Any]) -> str:
     if restore["detail"]:
         restore_line += f" ({md(restore['detail'], DETAIL_LIMIT)})"
     out.append(restore_line + ".")
+    dropped = dropped_text(doc)
+    if dropped is not None:
+        out += ["", f"Our sockets' receive queues: {md(dropped)}."]
     if doc["capture"] is not None:
         out += ["", f"Capture: [{md(doc['capture'])}]({quote(one_line(doc['capture']))}) "
                    "(MCAP, opens in Foxglove)."]

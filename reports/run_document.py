@@ -8,7 +8,7 @@ a one-line `UsageError` naming the file and the JSON path, never a traceback fro
 Two runs of the same target differ only in one top-level section, `volatile`: every value
 that changes from run to run without the target behaving differently (when it started, how
 long things took, when each message came, the target's ephemeral address, numbers measured
-off the clock) lives there and nowhere else, so `jq 'del(.volatile)'` on two run.json files
+off the clock, the datagrams our own sockets dropped) lives there and nowhere else, so `jq 'del(.volatile)'` on two run.json files
 leaves the behaviour to compare. A measured number inside a detail or a note is written
 `<name>` in the text and its value is in the volatile section; renderers read times and
 texts through `clause_events`, `clause_detail`, `clause_duration` and `run_facts`, which
@@ -31,6 +31,10 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
     volatile  {started, duration_s, forced_wait_s (or null), address (the target's, or null),
                [identity: {KEY: {name: text}}],                  an identity text's <name>s
                                                                  (how long the target booted)
+               [receive_queue: {dropped, buffer_bytes}],         our sockets' kernel receive
+                                 queues: datagrams they dropped before we read them (null:
+                                 the platform cannot tell) and the smallest buffer granted
+                                 (bytes, or null)
                clauses: {ID: {duration_s, events: [t, ...],      one t per exchange event:
                                                                  s from the clause's start
                               [detail: {name: text}],            the detail's <name>s
@@ -411,6 +415,11 @@ class _Checker:
         if "identity" in volatile:
             for key, values in self.value(volatile["identity"], "volatile.identity", ("object",)).items():
                 self.values(values, f"volatile.identity.{key}")
+        if "receive_queue" in volatile:
+            queue = self.value(volatile["receive_queue"], "volatile.receive_queue", ("object",))
+            for key in ("dropped", "buffer_bytes"):
+                if self.key(queue, key, "volatile.receive_queue", "integer", "null") is not None:
+                    self.count(queue, key, "volatile.receive_queue")
         per_clause = self.key(volatile, "clauses", "volatile", "object")
         by_id = {clause["id"]: clause for clause in clauses}
         for clause_id in per_clause:
@@ -537,6 +546,12 @@ def identity_fact(doc: dict[str, Any], key: str) -> Any:
     if not isinstance(value, str):
         return value
     return fill(value, ((doc.get("volatile") or {}).get("identity") or {}).get(key, {}))
+
+
+def receive_queue(doc: dict[str, Any]) -> dict[str, Any] | None:
+    """Our sockets' receive queues in the run: {dropped, buffer_bytes}, each None where not
+    known; None if the document does not say (a run before this was recorded)."""
+    return (doc.get("volatile") or {}).get("receive_queue")
 
 
 def run_facts(doc: dict[str, Any]) -> dict[str, Any]:

@@ -12,7 +12,7 @@ import json
 import re
 from typing import Any
 
-from mavconform.reports.run_document import NOTE, RX, TX
+from mavconform.reports.run_document import NOTE, RX, TX, receive_queue
 from mavconform.reports.run_document import run_facts as volatile_facts
 
 # C0 controls but tab and newline, DEL, C1 controls, bidi embeddings/overrides/isolates,
@@ -114,6 +114,23 @@ def document_identity(doc: dict[str, Any]) -> str:
     """The target's identity as the document knows it (a fuzz campaign does not record it)."""
     return identity_text(doc["identity"], "not recorded by a fuzz campaign" if "fuzz" in doc
                          else "no answer from the target", volatile_facts(doc)["address"])
+
+
+def dropped_text(doc: dict[str, Any]) -> str | None:
+    """What our sockets' receive queues dropped, for people: "none dropped (receive buffer
+    8192 KiB)", "12 datagrams dropped before we read them (...)", "drops unknown (...)";
+    None if the run did not record it."""
+    queue = receive_queue(doc)
+    if queue is None:
+        return None
+    dropped, granted = queue.get("dropped"), queue.get("buffer_bytes")
+    if dropped is None:
+        said = "drops unknown (this platform does not count them)"
+    elif dropped == 0:
+        said = "none dropped"
+    else:
+        said = f"{dropped} datagram{'' if dropped == 1 else 's'} dropped before we read them"
+    return said + (f" (receive buffer {granted // 1024} KiB)" if granted is not None else "")
 
 
 def seconds(value: float) -> str:

@@ -138,6 +138,12 @@ BAD_DOCUMENTS = [
      "volatile.clauses.MIS.CUR.04.detail.delay: expected a string, found the number 0.253"),
     (("volatile", "clauses", "MIS.UP.07", "notes"), {"0": {"waited": "1.5"}},
      "volatile.clauses.MIS.UP.07.notes.0: not the index of a note in the exchange"),
+    (("volatile", "receive_queue"), 12, "volatile.receive_queue: expected an object, found the number 12"),
+    (("volatile", "receive_queue"), {"buffer_bytes": None}, "volatile.receive_queue: missing 'dropped'"),
+    (("volatile", "receive_queue"), {"dropped": -1, "buffer_bytes": None},
+     "volatile.receive_queue.dropped: expected a count, found -1"),
+    (("volatile", "receive_queue"), {"dropped": 0, "buffer_bytes": "8 MiB"},
+     "volatile.receive_queue.buffer_bytes: expected an integer or null, found the string '8 MiB'"),
 ]
 
 
