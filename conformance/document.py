@@ -5,7 +5,8 @@ is built once, at the end of a run, from the results and the run's options; ever
 is a view of it. Each clause's `decided_by` is the index of the exchange event its check
 judged last (the report marks it): an index, so stable, since the events' order is. What differs between two runs of the same target (start time, durations,
 event times, forced waits, the target's ephemeral address, the numbers of `Measured`
-texts) goes into its `volatile` section only, so the rest diffs to nothing. A run stopped
+texts, the datagrams our sockets dropped) goes into its `volatile` section only, so the
+rest diffs to nothing. A run stopped
 by a signal says so (`run.interrupted`, where and by what) and its verdict is
 "interrupted": the clauses it did not reach are skipped, not passed.
 """
@@ -76,7 +77,8 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
                      "duration_s": round(run.duration_s, 3),
                      "forced_wait_s": round(run.forced_wait_s, 3),
                      "address": address, "clauses": per_clause,
-                     **({"identity": measured_identity} if measured_identity else {})},
+                     **({"identity": measured_identity} if measured_identity else {}),
+                     **({"receive_queue": dict(run.receive_queue)} if run.receive_queue is not None else {})},
     }
 
 

@@ -55,6 +55,8 @@ class RunOutcome:
     interrupted_by: str | None = None   # "SIGINT", "SIGTERM"
     late_signal: str | None = None      # a signal that came while restoring or reporting, held back
     snapshot: dict[str, int] = field(default_factory=dict)
+    # our sockets' receive queues (Session.receive_facts): datagrams dropped, buffer granted
+    receive_queue: dict[str, int | None] | None = None
 
 
 @dataclass
@@ -190,7 +192,8 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
             for clause in clauses:
                 record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
             return RunOutcome(results, None, {"status": "skipped", "detail": "the target never answered"},
-                              time.monotonic() - started, 0.0, unresponsive=str(exc))
+                              time.monotonic() - started, 0.0, unresponsive=str(exc),
+                              receive_queue=session.receive_facts())
         if restore:
             phase = "reading the target's plans"
             snapshot = _snapshot(session)
@@ -240,7 +243,8 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
     return RunOutcome(results, identity, restore_status, time.monotonic() - started, forced,
                       unresponsive=dead, discovery_s=discovered, interrupted=interrupted,
                       interrupted_at=phase if interrupted else None,
-                      interrupted_by=how if interrupted else None)
+                      interrupted_by=how if interrupted else None,
+                      receive_queue=session.receive_facts())
 
 
 def interrupted_before_start(clauses: Iterable[Clause], how: str | None,

@@ -4,6 +4,10 @@ In-process targets (`builtin:`, `mutant:`) put our vehicle node on the same driv
 tester, so one single-threaded loop serves both ends: over real UDP loopback sockets by
 default, or over `SimNetwork` in virtual time (`virtual=True`, used by the suite's own
 negative-control tests, where thousands of protocol seconds cost milliseconds).
+
+The testers' sockets are ours: what their kernel receive queues drop never reached us, so a
+gap it leaves in the target's packet sequence is not the target's (each tester knows its
+socket's `receive_queue`; the run's `receive_facts` are for the reports).
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ from typing import Any, Callable
 
 from mavconform.reference_impl.mission.messages import is_vehicle_heartbeat
 from mavconform.reference_impl.net.guard import GuardedNode
+from mavconform.reference_impl.net.receive_queue import total_drops
 from mavconform.reference_impl.net.shared_link import SharedLink
 from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
 from mavconform.reference_impl.net.udp import UdpDriver
@@ -71,6 +76,7 @@ class Session:
         self._more: dict[int, Tester] = {}      # GCSs with other system ids (`gcs`)
         node = TesterNode("tester", TESTER_SYSTEM, TESTER_COMPONENT)
         self.link = SharedLink(node)
+        self._sockets: list[Any] = [self.link]   # the testers' own: the link, GCSs apart
         if virtual:
             if not uri.in_process:
                 raise ValueError("virtual time needs an in-process target")
@@ -107,6 +113,7 @@ class Session:
         if shared_link is None:
             shared_link = self.vehicle.config.single_peer_link if self.vehicle is not None else True
         self.shared_link = shared_link
+        node.receive_queue = self.driver.receive_queue(self.link)
         self.capture = capture   # its `mark`, if it has one, labels where each clause starts
         if capture is not None:
             self.driver.add_capture(capture)
@@ -174,12 +181,17 @@ class Session:
         node.target = self.t.node.target
         if self.shared_link:
             self.link.join(node)
+            node.receive_queue = self.t.node.receive_queue
         elif self.virtual:
             self.driver.add_node(name, node)
             self.driver.connect(name, "vehicle")
+            self._sockets.append(node)
         else:
             host = self.target_address[0] if isinstance(self.target_address, tuple) else "127.0.0.1"
             self.driver.add_node(node, bind=(local_bind_for(host), 0))
+            self._sockets.append(node)
+        if not self.shared_link:
+            node.receive_queue = self.driver.receive_queue(node)
         node.endpoint.add_address(self.target_address)
         tester = Tester(node, self.driver, scale=self.scale)
         tester.form = self.t.form
@@ -212,6 +224,14 @@ class Session:
         decided = exchange.events[index] if index is not None and index >= first else None
         self.cache[key] = (value, events, self.current_clause, decided)
         return value
+
+    def receive_facts(self) -> dict[str, int | None]:
+        """For the run's report: the datagrams all the testers' sockets dropped (None:
+        unknown) and the smallest receive buffer the kernel granted them (None: unknown, or
+        no socket, as in virtual time)."""
+        queues = [self.driver.receive_queue(node) for node in self._sockets]
+        granted = [q.granted for q in queues if q.granted is not None]
+        return {"dropped": total_drops(queues), "buffer_bytes": min(granted) if granted else None}
 
     def testers(self) -> list[Tester]:
         return [self.t] + ([self._second] if self._second is not None else []) + list(self._more.values())

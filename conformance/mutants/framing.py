@@ -45,6 +45,25 @@ class _RepeatsPacketSeq(VehicleNode):
         encoder.encode = encode_repeating
 
 
+class _SkipsPacketSeq(VehicleNode):
+    """Every 8th frame advances the packet sequence by two: one value is never sent."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        encoder = self.endpoint.encoder
+        encode = encoder.encode
+        count = [0]
+
+        def encode_skipping(msg, **kw):
+            data = encode(msg, **kw)
+            count[0] += 1
+            if count[0] % 8 == 0:
+                encoder._mav.seq = (encoder._mav.seq + 1) & 0xFF
+            return data
+
+        encoder.encode = encode_skipping
+
+
 class _HeartbeatOnce(VehicleNode):
     """Sends its first HEARTBEAT (so it can be found), then never again."""
 
@@ -61,6 +80,8 @@ mutant("corrupts-rally-items", "sends every other rally item with a bad checksum
        {"MIS.FRM.02"}, vehicle_mutant(_CorruptsRallyItems))
 mutant("repeats-packet-seq", "every 8th frame repeats the packet sequence number of the one before",
        {"MIS.FRM.03"}, vehicle_mutant(_RepeatsPacketSeq))
+mutant("skips-packet-seq", "every 8th frame skips a packet sequence number (a gap no lost frame explains)",
+       {"MIS.FRM.03"}, vehicle_mutant(_SkipsPacketSeq))
 mutant("heartbeat-once", "sends one HEARTBEAT at start-up and no more",
        {"MIS.FRM.04"}, vehicle_mutant(_HeartbeatOnce))
 
