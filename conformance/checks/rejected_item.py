@@ -89,9 +89,9 @@ def rejected_item_keeps_plan(s: Session) -> str:
             raise ClauseFailed(f"{what}, then went on requesting (item {later.msg.seq} after its "
                                "error): the error did not end the upload")
         procedures.require_same_plan(procedures.stored(t, MISSION), old, f"after {what}", t.form)
-        tried = f"; it accepted {_listed(accepted)} first" if accepted else ""
+        tried = f"; it accepted {'; '.join(accepted)} first" if accepted else ""
         return f"{what} and kept the old plan{tried}"
-    raise NotApplicable(f"the vehicle accepted every item tried as one it might reject ({_listed(accepted)}), "
+    raise NotApplicable(f"the vehicle accepted every item tried as one it might reject ({'; '.join(accepted)}), "
                         "so no item it rejects was found")
 
 
@@ -112,7 +112,3 @@ def _offer(t: Tester, items: list[MissionItem]) -> Frame:
         raise ClauseFailed(f"after item {REFUSED_AT} of {len(items)} the upload stalled: the vehicle "
                            "neither accepted the plan nor refused the item with a MISSION_ACK")
     return final
-
-
-def _listed(labels: list[str]) -> str:
-    return "; ".join(labels)
