@@ -9,7 +9,8 @@ only item 0, which ArduPilot keeps as home), so every claim here is run, for eve
 profile (tests/profiles/test_knob_matrix.py), and a knob no clause judges says why.
 
 `JUDGES` has a row for every knob. For a value other than the spec default (a profile's
-value, its alternative, or the row's `example` when no builtin profile sets the knob):
+value, its alternative, or the row's `example`, which gives a knob no builtin profile sets
+a run too):
 
 (a) alone: the spec vehicle (builtin:spec as the suite runs it) with just that knob, and the
     knobs the row `needs` at the same profile's values, gives exactly the row's verdicts:
@@ -22,9 +23,9 @@ value, its alternative, or the row's `example` when no builtin profile sets the 
     (but the ones this knob needs) still gives the clause this knob's outcome: the
     profile's other knobs (home at seq 0, say) do not hide the deviation from the probe.
 
-A profile setting a knob to the spec default changes nothing (asserted, then skipped). A
-row's verdicts hold for every non-default value the profiles use; a value that gives other
-verdicts makes (a) fail, and the row must say what that value changes.
+A knob a profile sets to the spec default (`loader.spec_default`; P1', P2', A3) changes
+nothing and is left out. A row's verdicts hold for every non-default value the profiles use;
+a value that gives other verdicts makes (a) fail, and the row must say what that value changes.
 """
 
 from __future__ import annotations
