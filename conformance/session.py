@@ -37,17 +37,20 @@ DISCOVERY_TIMEOUT = 5.0   # s for the first HEARTBEAT (heartbeats are 1 Hz), sca
 
 
 def build_vehicle(uri: TargetUri, *, wall_clock: Callable[[], float] = time.time,
-                  **config: Any) -> VehicleNode:
+                  base: VehicleConfig | None = None, **config: Any) -> VehicleNode:
     """The in-process vehicle a `builtin:` or `mutant:` target names, with `VehicleConfig`
     fields overridden by `config` (the fuzzers run signing vehicles). `wall_clock` feeds
-    the signing timestamps of builtin vehicles; mutants are built as they declare."""
+    the signing timestamps of builtin vehicles; mutants are built as they declare. `base`:
+    a builtin vehicle from this config instead of its profile's (the knob matrix builds
+    vehicles knob by knob, conformance/knob_judges.py)."""
     if uri.kind == "mutant":
         from .mutants import MUTANTS
         return MUTANTS[uri.name].build(dataclasses.replace(VehicleConfig(), **config))
-    base = VehicleConfig()
-    if uri.name != "spec":
-        from mavconform.reference_impl.profiles import load_profile
-        base = load_profile(uri.name).config
+    if base is None:
+        base = VehicleConfig()
+        if uri.name != "spec":
+            from mavconform.reference_impl.profiles import load_profile
+            base = load_profile(uri.name).config
     return VehicleNode(dataclasses.replace(base, **config), wall_clock=wall_clock)
 
 
@@ -57,11 +60,18 @@ class Session:
     `shared_link`: the second GCS speaks from the first one's socket (another system id on
     the same link, routed by target_system), as a target whose GCS link is bound to one
     peer needs (VARIANTS.md L1, L2). Default: shared for every external target and for an
-    in-process vehicle whose profile models such a link; a socket of its own otherwise."""
+    in-process vehicle whose profile models such a link; a socket of its own otherwise.
+
+    `config`: a `builtin:` target's vehicle built from this `VehicleConfig` instead of its
+    profile's (the suite's own overrides still apply), so a test can run the clauses against
+    a vehicle with any set of knobs (conformance/knob_judges.py)."""
 
     def __init__(self, uri: TargetUri, *, scale: float = 1.0, virtual: bool = False,
                  seed: int = 0, allow_flight: bool | None = None,
-                 capture: CaptureHook | None = None, shared_link: bool | None = None) -> None:
+                 capture: CaptureHook | None = None, shared_link: bool | None = None,
+                 config: VehicleConfig | None = None) -> None:
+        if config is not None and uri.kind != "builtin":
+            raise ValueError("a vehicle config replaces a builtin target's profile only")
         self.uri = uri
         self.scale = scale
         self.virtual = virtual
@@ -81,7 +91,7 @@ class Session:
             if not uri.in_process:
                 raise ValueError("virtual time needs an in-process target")
             self.driver: Any = SimNetwork(seed)
-            self.vehicle = build_vehicle(uri, **uri.suite_overrides())
+            self.vehicle = build_vehicle(uri, base=config, **uri.suite_overrides())
             self.guard = GuardedNode(self.vehicle)
             self.driver.add_node("vehicle", self.guard)
             self.driver.add_node("tester", self.link)
@@ -93,7 +103,7 @@ class Session:
             self.driver = UdpDriver(seed=seed)
             try:
                 if uri.in_process:
-                    self.vehicle = build_vehicle(uri, **uri.suite_overrides())
+                    self.vehicle = build_vehicle(uri, base=config, **uri.suite_overrides())
                     self.guard = GuardedNode(self.vehicle)
                     self.target_address = self.driver.add_node(self.guard)
                     tester_address = self.driver.add_node(self.link)

@@ -219,8 +219,8 @@ COVERAGE: tuple[Entry, ...] = (
        why="the GCS's end (MIS.G.UP.08, MIS.G.DN.08): nothing more sent for the operation after the "
            "vehicle's error ACK"),
     _e("601.3", "Instead it may be a mix of the original and new mission.",
-       why=f"{INFORMATIVE}: ArduPilot's non-atomic upload (VARIANTS A2), a departure MIS.UP.05 and MIS.CAN.02 "
-           "report"),
+       why=f"{INFORMATIVE}: ArduPilot's non-atomic upload (VARIANTS A2), a departure MIS.UP.05, "
+           "MIS.UP.12, MIS.UP.17 and MIS.CAN.02 report"),
     _e("603.1", "Even if upload is successful, the vehicle mission may not match the version on the uploading "
        "system (and if the mission is then downloaded it will differ from the original).",
        why=f"{INFORMATIVE}: ArduPilot's home in slot 0 and rounded storage (VARIANTS A1, A13); plans are "

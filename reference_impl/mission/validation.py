@@ -9,8 +9,8 @@ frame (`CommandList`, as PX4's parser has), and the frames an item with a locati
 are a set a profile may widen (`rules_for`); the spec vehicle knows every mission command of
 the upstream XML (commands.py) in any global frame or MAV_FRAME_MISSION. A NaN in params 1-4
 means "use the default" to the spec vehicle; a profile may say which params of which commands
-may be NaN (`param_rules`, checked before anything else, as ArduPilot does) and cap the
-altitude of a location (`altitude_rules`).
+may be NaN (`param_rules`, checked before anything else, as ArduPilot does), cap the
+altitude of a location (`altitude_rules`) and leave latitude and longitude unchecked (PX4).
 """
 
 from __future__ import annotations
@@ -174,14 +174,16 @@ _FIELD_RULES: tuple[ItemRule, ...] = (
     *(ItemRule(f"param{n} is not infinite", _PARAM_CODES[n],
                lambda it: True, (lambda n: lambda it: _not_inf(_param(n)(it)))(n))
       for n in (1, 2, 3, 4)),
+)
+_LAT_LON_RULES: tuple[ItemRule, ...] = (
     ItemRule("latitude within +-90 deg", MissionResult.INVALID_PARAM5_X,
              lambda it: it.frame in GLOBAL_FRAMES, lambda it: -900_000_000 <= it.x <= 900_000_000),
     ItemRule("longitude within +-180 deg", MissionResult.INVALID_PARAM6_Y,
              lambda it: it.frame in GLOBAL_FRAMES,
              lambda it: -1_800_000_000 <= it.y <= 1_800_000_000),
-    ItemRule("altitude finite", MissionResult.INVALID_PARAM7,
-             _positional, lambda it: math.isfinite(it.z)),
 )
+_ALTITUDE_FINITE = ItemRule("altitude finite", MissionResult.INVALID_PARAM7,
+                            _positional, lambda it: math.isfinite(it.z))
 _COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (
     ItemRule("waypoint hold time >= 0", MissionResult.INVALID_PARAM1,
              lambda it: it.command == Cmd.NAV_WAYPOINT,
@@ -205,12 +207,16 @@ _COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (
 def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
               location_frames: AbstractSet[int] | None = None,
               nan_params: NanParams | None = None,
-              location_alt_max: float | None = None) -> tuple[ItemRule, ...]:
+              location_alt_max: float | None = None,
+              lat_lon_range_check: bool = True) -> tuple[ItemRule, ...]:
     """The spec rules with another set (or frame table) of mission commands (None: any
     command, see `command_rules`), other frames for items with a location (`frame_rules`),
-    params that may be NaN (`param_rules`) and an altitude cap (`altitude_rules`)."""
+    params that may be NaN (`param_rules`), an altitude cap (`altitude_rules`), and without
+    the latitude/longitude range check (`lat_lon_range_check=False`: PX4 takes them as sent)."""
+    lat_lon = _LAT_LON_RULES if lat_lon_range_check else ()
     return (*param_rules(nan_params), *command_rules(mission_commands), *frame_rules(location_frames),
-            *_FIELD_RULES, *altitude_rules(location_alt_max), *_COMMAND_VALUE_RULES)
+            *_FIELD_RULES, *lat_lon, _ALTITUDE_FINITE, *altitude_rules(location_alt_max),
+            *_COMMAND_VALUE_RULES)
 
 
 SPEC_RULES: tuple[ItemRule, ...] = rules_for(MISSION_COMMANDS)

@@ -9,8 +9,8 @@ knobs. The engines read knobs and never a profile name.
 from __future__ import annotations
 
 from .knobs import KNOBS, Knob
-from .loader import BUILTIN_PROFILES, load_profile
+from .loader import BUILTIN_PROFILES, build_config, load_profile
 from .model import Alternative, Documented, KnobSetting, Profile
 
 __all__ = ["BUILTIN_PROFILES", "KNOBS", "Alternative", "Documented", "Knob", "KnobSetting",
-           "Profile", "load_profile"]
+           "Profile", "build_config", "load_profile"]

@@ -213,6 +213,9 @@ _KNOBS = (
     Knob("location_alt_max", RULES, "location_alt_max", _metres,
          "m: a mission item whose command has a location needs a finite altitude below this in "
          "magnitude (else INVALID_PARAM7; default: a destination's altitude need only be finite)"),
+    Knob("lat_lon_range_check", RULES, "lat_lon_range_check", _bool,
+         "a mission item in a global frame needs a latitude within +-90 and a longitude within "
+         "+-180 degrees (else INVALID_PARAM5_X / INVALID_PARAM6_Y); false: taken as sent"),
     Knob("idle_reply", BEHAVIOUR, "idle_reply", _result_or_none, "MISSION_ACK for a stray item/request in idle (\"none\": silence)"),
     Knob("reack_last_item", BEHAVIOUR, "reack_last_item", _bool, "a late copy of the last item draws ACCEPTED again"),
     Knob("notify_upload_give_up", BEHAVIOUR, "notify_upload_give_up", _bool,

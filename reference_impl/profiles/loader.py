@@ -21,9 +21,10 @@ and the key.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from ..errors import UsageError
 from ..mission.behaviour import ServerBehaviour
@@ -179,6 +180,29 @@ def _parse(name: str, value: Any, where: str) -> Any:
         return KNOBS[name].parse(value)
     except ValueError as exc:
         raise UsageError(f"{where}: bad value: {exc}") from None
+
+
+def build_config(settings: Sequence[KnobSetting], where: str = "knob settings") -> VehicleConfig:
+    """The reference vehicle's config with just these knob settings (every other knob at the
+    spec's default): what a profile file builds, without the file. The knob matrix
+    (conformance/knob_judges.py) builds its vehicles one knob at a time with it. Settings that
+    do not fit together are a `UsageError` naming `where`."""
+    for s in settings:
+        if s.knob not in KNOBS:
+            raise UsageError(f"{where}: unknown knob {s.knob!r}")
+        _parse(s.knob, s.value, f"{where} ({s.knob})")
+    return _build(tuple(settings), Path(where))[1]
+
+
+def spec_default(knob: str) -> Any:
+    """The engine value a knob has when no profile sets it (the spec vehicle's), to compare
+    with `KNOBS[knob].parse(value)`: a profile may set a knob to it (P1', P2', A3), which
+    then changes nothing."""
+    k = KNOBS[knob]
+    if k.where == RULES:
+        return inspect.signature(rules_for).parameters[k.field].default
+    owner = {BEHAVIOUR: ServerBehaviour, TIMINGS: Timings, CONFIG: VehicleConfig}[k.where]
+    return getattr(owner(), k.field)
 
 
 def _build(settings: tuple[KnobSetting, ...], path: Path) -> tuple[ServerBehaviour, VehicleConfig]:

@@ -62,7 +62,7 @@ def test_a_broken_silence_is_decided_by_the_frame_that_broke_it() -> None:
     result = _run("mutant:ignores-gcs-error-ack", "MIS.UP.12")["MIS.UP.12"]
     assert result.outcome is Outcome.FAIL and "expected no MISSION_REQUEST" in str(result.detail)
     event = _decider(result)
-    assert event["dir"] == "rx" and event["msg"] in REQUESTS and event["fields"]["seq"] == 1
+    assert event["dir"] == "rx" and event["msg"] in REQUESTS and event["fields"]["seq"] == 2
     # the first request after the GCS's error ACK, not a later one
     error_ack = max(i for i, e in enumerate(result.exchange)
                     if e["dir"] == "tx" and e["msg"] == "MISSION_ACK" and e["fields"]["type"] == 1)

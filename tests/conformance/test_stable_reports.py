@@ -128,7 +128,7 @@ def test_a_timing_based_failure_keeps_its_measured_number_apart(tmp_path, capsys
                                            else c.find("skipped")).get("message")
                 for c in junit.iter("testcase")}
     assert messages["MIS.CAN.01"].endswith(f"(a SHOULD failure fails the run only with --strict): {full}")
-    assert re.search(r"got MISSION_REQUEST_INT\{seq=1, mission_type=0\} after 0\.2\d\d s$",
+    assert re.search(r"got MISSION_REQUEST_INT\{seq=2, mission_type=0\} after 0\.2\d\d s$",
                      messages["MIS.UP.12"])
 
 

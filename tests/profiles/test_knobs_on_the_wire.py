@@ -84,6 +84,19 @@ def test_a_sequence_nack_does_not_end_the_upload_but_a_refused_item_does():   # 
     assert only(s.feed(item(items[1]), OTHER_GCS), "MISSION_ACK")[0].type != R.ACCEPTED
 
 
+def test_a_refused_item_mid_upload_leaves_the_items_written_before_it():   # A2 with A3 (master)
+    """What MIS.UP.17 sees on ArduPilot: MISSION_COUNT cut the plan, items 0-1 were written,
+    item 2 is refused; nothing is restored."""
+    s = server("ardupilot")
+    old, new = plan(4), plan(3, z=99.0)
+    upload(s, old)
+    s.feed(count(3)); s.feed(item(new[0])); s.feed(item(new[1]))
+    out = s.feed(item(replace(new[2], command=31999)))          # no such command
+    assert acks(out) == [(R.UNSUPPORTED, T.MISSION)]
+    assert not only(s.advance(2.0), "MISSION_REQUEST") and s.engine.is_idle()
+    assert list(s.engine.store.items(T.MISSION)) == [new[0], new[1], old[2]]
+
+
 def test_cancel_is_ignored_then_the_vehicle_times_out_with_ack_and_statustext():   # A4, A5
     s = server("ardupilot")
     s.feed(count(3))
@@ -221,6 +234,18 @@ def test_px4_stores_only_the_commands_its_parser_knows():          # P19
     s = server("px4")
     s.feed(count(1))
     assert acks(s.feed(item(waypoint(0, frame=2, command=d.MAV_CMD_DO_SET_SERVO)))) == [(R.UNSUPPORTED, T.MISSION)]
+
+
+def test_px4_takes_any_latitude_but_refuses_an_unknown_command_or_a_local_frame():   # P20, P19, P14
+    """parse_mavlink_mission_item copies lat/lon unchecked; the spec vehicle refuses latitude 100."""
+    far = waypoint(0, x=1_000_000_000)
+    assert acks(upload(server("px4"), [far])) == [(R.ACCEPTED, T.MISSION)]
+    assert acks(upload(server("spec"), [far])) == [(R.INVALID_PARAM5_X, T.MISSION)]
+    for bad, code in ((waypoint(0, command=31999), R.UNSUPPORTED),
+                      (waypoint(0, frame=d.MAV_FRAME_LOCAL_NED), R.UNSUPPORTED_FRAME)):
+        s = server("px4")
+        s.feed(count(1))
+        assert acks(s.feed(item(bad))) == [(code, T.MISSION)], bad
 
 
 # --- PX4-like ------------------------------------------------------------------------------
