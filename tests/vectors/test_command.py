@@ -12,7 +12,7 @@ def test_generate_then_check(tmp_path: Path, capsys) -> None:
     out = tmp_path / "v"
     assert main(["vectors", "generate", "--out", str(out)]) == 0
     said = capsys.readouterr().out
-    assert "wrote 288 message vectors and 53 exchanges" in said and "message vectors/s" in said
+    assert "wrote 337 message vectors and 53 exchanges" in said and "message vectors/s" in said
     assert main(["vectors", "generate", "--out", str(out), "--check"]) == 0
     assert "identical to a regeneration" in capsys.readouterr().out
     mcap = out / "exchanges" / "px4" / "error-ack.mcap"

@@ -796,6 +796,32 @@ enums["NAV_TAKEOFF_FLAGS"][1] = EnumEntry("NAV_TAKEOFF_FLAGS_HORIZONTAL_POSITION
 NAV_TAKEOFF_FLAGS_ENUM_END = 2
 enums["NAV_TAKEOFF_FLAGS"][2] = EnumEntry("NAV_TAKEOFF_FLAGS_ENUM_END", """""")
 
+# MAV_PARAM_TYPE
+enums["MAV_PARAM_TYPE"] = Enum()
+enums["MAV_PARAM_TYPE"].bitmask = False
+MAV_PARAM_TYPE_UINT8 = 1
+enums["MAV_PARAM_TYPE"][1] = EnumEntry("MAV_PARAM_TYPE_UINT8", """8-bit unsigned integer""")
+MAV_PARAM_TYPE_INT8 = 2
+enums["MAV_PARAM_TYPE"][2] = EnumEntry("MAV_PARAM_TYPE_INT8", """8-bit signed integer""")
+MAV_PARAM_TYPE_UINT16 = 3
+enums["MAV_PARAM_TYPE"][3] = EnumEntry("MAV_PARAM_TYPE_UINT16", """16-bit unsigned integer""")
+MAV_PARAM_TYPE_INT16 = 4
+enums["MAV_PARAM_TYPE"][4] = EnumEntry("MAV_PARAM_TYPE_INT16", """16-bit signed integer""")
+MAV_PARAM_TYPE_UINT32 = 5
+enums["MAV_PARAM_TYPE"][5] = EnumEntry("MAV_PARAM_TYPE_UINT32", """32-bit unsigned integer""")
+MAV_PARAM_TYPE_INT32 = 6
+enums["MAV_PARAM_TYPE"][6] = EnumEntry("MAV_PARAM_TYPE_INT32", """32-bit signed integer""")
+MAV_PARAM_TYPE_UINT64 = 7
+enums["MAV_PARAM_TYPE"][7] = EnumEntry("MAV_PARAM_TYPE_UINT64", """64-bit unsigned integer""")
+MAV_PARAM_TYPE_INT64 = 8
+enums["MAV_PARAM_TYPE"][8] = EnumEntry("MAV_PARAM_TYPE_INT64", """64-bit signed integer""")
+MAV_PARAM_TYPE_REAL32 = 9
+enums["MAV_PARAM_TYPE"][9] = EnumEntry("MAV_PARAM_TYPE_REAL32", """32-bit floating-point""")
+MAV_PARAM_TYPE_REAL64 = 10
+enums["MAV_PARAM_TYPE"][10] = EnumEntry("MAV_PARAM_TYPE_REAL64", """64-bit floating-point""")
+MAV_PARAM_TYPE_ENUM_END = 11
+enums["MAV_PARAM_TYPE"][11] = EnumEntry("MAV_PARAM_TYPE_ENUM_END", """""")
+
 # MAV_DATA_STREAM
 enums["MAV_DATA_STREAM"] = Enum()
 enums["MAV_DATA_STREAM"].bitmask = False
@@ -1090,6 +1116,46 @@ enums["MAV_CMD"][300].param[4] = """Reserved (default:0)"""
 enums["MAV_CMD"][300].param[5] = """Reserved (default:0)"""
 enums["MAV_CMD"][300].param[6] = """Reserved (default:0)"""
 enums["MAV_CMD"][300].param[7] = """Reserved (default:0)"""
+MAV_CMD_COMPONENT_ARM_DISARM = 400
+enums["MAV_CMD"][400] = EnumEntry("MAV_CMD_COMPONENT_ARM_DISARM", """Arms / Disarms a component""")
+enums["MAV_CMD"][400].param[1] = """Arm (MAV_BOOL_FALSE: disarm). Values not equal to 0 or 1 are invalid."""
+enums["MAV_CMD"][400].label[1] = """Arm"""
+enums["MAV_CMD"][400].param[2] = """0: arm-disarm unless prevented by safety checks (i.e. when landed), 21196: force arming/disarming (e.g. allow arming to override preflight checks and disarming in flight)"""
+enums["MAV_CMD"][400].label[2] = """Force"""
+enums["MAV_CMD"][400].param[3] = """Reserved (default:0)"""
+enums["MAV_CMD"][400].param[4] = """Reserved (default:0)"""
+enums["MAV_CMD"][400].param[5] = """Reserved (default:0)"""
+enums["MAV_CMD"][400].param[6] = """Reserved (default:0)"""
+enums["MAV_CMD"][400].param[7] = """Reserved (default:0)"""
+MAV_CMD_GET_HOME_POSITION = 410
+enums["MAV_CMD"][410] = EnumEntry(
+    "MAV_CMD_GET_HOME_POSITION",
+    """Request the home position from the vehicle.
+          The vehicle will ACK the command and emit the HOME_POSITION message.""",
+)
+enums["MAV_CMD"][410].param[1] = """Reserved"""
+enums["MAV_CMD"][410].param[2] = """Reserved"""
+enums["MAV_CMD"][410].param[3] = """Reserved"""
+enums["MAV_CMD"][410].param[4] = """Reserved"""
+enums["MAV_CMD"][410].param[5] = """Reserved"""
+enums["MAV_CMD"][410].param[6] = """Reserved"""
+enums["MAV_CMD"][410].param[7] = """Reserved"""
+MAV_CMD_REQUEST_MESSAGE = 512
+enums["MAV_CMD"][512] = EnumEntry("MAV_CMD_REQUEST_MESSAGE", """Request the target system(s) emit a single instance of a specified message (i.e. a "one-shot" version of MAV_CMD_SET_MESSAGE_INTERVAL).""")
+enums["MAV_CMD"][512].param[1] = """The MAVLink message ID of the requested message."""
+enums["MAV_CMD"][512].label[1] = """Message ID"""
+enums["MAV_CMD"][512].param[2] = """Use for index ID, if required. Otherwise, the use of this parameter (if any) must be defined in the requested message. By default assumed not used (0)."""
+enums["MAV_CMD"][512].label[2] = """Req Param 1"""
+enums["MAV_CMD"][512].param[3] = """The use of this parameter (if any), must be defined in the requested message. By default assumed not used (0)."""
+enums["MAV_CMD"][512].label[3] = """Req Param 2"""
+enums["MAV_CMD"][512].param[4] = """The use of this parameter (if any), must be defined in the requested message. By default assumed not used (0)."""
+enums["MAV_CMD"][512].label[4] = """Req Param 3"""
+enums["MAV_CMD"][512].param[5] = """The use of this parameter (if any), must be defined in the requested message. By default assumed not used (0)."""
+enums["MAV_CMD"][512].label[5] = """Req Param 4"""
+enums["MAV_CMD"][512].param[6] = """The use of this parameter (if any), must be defined in the requested message. By default assumed not used (0)."""
+enums["MAV_CMD"][512].label[6] = """Req Param 5"""
+enums["MAV_CMD"][512].param[7] = """Target address for requested message (if message has target address fields). 0: Flight-stack default, 1: address of requester, 2: broadcast."""
+enums["MAV_CMD"][512].label[7] = """Response Target"""
 MAV_CMD_NAV_FENCE_RETURN_POINT = 5000
 enums["MAV_CMD"][5000] = EnumEntry("MAV_CMD_NAV_FENCE_RETURN_POINT", """Fence return point (at most one per fence; prefer rally points).""")
 enums["MAV_CMD"][5000].has_location = True
@@ -1190,6 +1256,8 @@ enums["MAV_CMD"][32101] = EnumEntry("MAV_CMD_ENUM_END", """""")
 MAVLINK_MSG_ID_BAD_DATA = -1
 MAVLINK_MSG_ID_UNKNOWN = -2
 MAVLINK_MSG_ID_HEARTBEAT = 0
+MAVLINK_MSG_ID_PARAM_REQUEST_READ = 20
+MAVLINK_MSG_ID_PARAM_VALUE = 22
 MAVLINK_MSG_ID_GLOBAL_POSITION_INT = 33
 MAVLINK_MSG_ID_MISSION_REQUEST_PARTIAL_LIST = 37
 MAVLINK_MSG_ID_MISSION_WRITE_PARTIAL_LIST = 38
@@ -1208,6 +1276,7 @@ MAVLINK_MSG_ID_MISSION_ITEM_INT = 73
 MAVLINK_MSG_ID_COMMAND_INT = 75
 MAVLINK_MSG_ID_COMMAND_LONG = 76
 MAVLINK_MSG_ID_COMMAND_ACK = 77
+MAVLINK_MSG_ID_HOME_POSITION = 242
 MAVLINK_MSG_ID_STATUSTEXT = 253
 MAVLINK_MSG_ID_SETUP_SIGNING = 256
 MAVLINK_MSG_ID_CONTROL_STATUS = 512
@@ -1256,6 +1325,103 @@ class MAVLink_heartbeat_message(MAVLink_message):
 # Define name on the class for backwards compatibility (it is now msgname).
 # Done with setattr to hide the class variable from mypy.
 setattr(MAVLink_heartbeat_message, "name", mavlink_msg_deprecated_name_property())
+
+
+class MAVLink_param_request_read_message(MAVLink_message):
+    """
+    Request to read the onboard parameter with the param_id string id.
+    Onboard parameters are stored as key[const char*] -> value[float].
+    This allows to send a parameter to any other component (such as
+    the GCS) without the need of previous knowledge of possible
+    parameter names. Thus the same GCS can store different parameters
+    for different autopilots. See also
+    https://mavlink.io/en/services/parameter.html for a full
+    documentation of QGroundControl and IMU code.
+    """
+
+    id = MAVLINK_MSG_ID_PARAM_REQUEST_READ
+    msgname = "PARAM_REQUEST_READ"
+    fieldnames = ["target_system", "target_component", "param_id", "param_index"]
+    ordered_fieldnames = ["param_index", "target_system", "target_component", "param_id"]
+    fieldtypes = ["uint8_t", "uint8_t", "char", "int16_t"]
+    fielddisplays_by_name: Dict[str, str] = {}
+    fieldenums_by_name: Dict[str, str] = {}
+    fieldunits_by_name: Dict[str, str] = {}
+    native_format = bytearray(b"<hBBc")
+    orders = [1, 2, 3, 0]
+    lengths = [1, 1, 1, 1]
+    array_lengths = [0, 0, 0, 16]
+    crc_extra = 214
+    unpacker = struct.Struct("<hBB16s")
+    instance_field = None
+    instance_offset = -1
+
+    def __init__(self, target_system: int, target_component: int, param_id: bytes, param_index: int):
+        MAVLink_message.__init__(self, MAVLink_param_request_read_message.id, MAVLink_param_request_read_message.msgname)
+        self._fieldnames = MAVLink_param_request_read_message.fieldnames
+        self._instance_field = MAVLink_param_request_read_message.instance_field
+        self._instance_offset = MAVLink_param_request_read_message.instance_offset
+        self.target_system = target_system
+        self.target_component = target_component
+        self._param_id_raw = param_id
+        self.param_id = param_id.split(b"\x00", 1)[0].decode("ascii", errors="replace")
+        self.param_index = param_index
+
+    def pack(self, mav: "MAVLink", force_mavlink1: bool = False) -> bytes:
+        return self._pack(mav, self.crc_extra, self.unpacker.pack(self.param_index, self.target_system, self.target_component, self._param_id_raw), force_mavlink1=force_mavlink1)
+
+
+# Define name on the class for backwards compatibility (it is now msgname).
+# Done with setattr to hide the class variable from mypy.
+setattr(MAVLink_param_request_read_message, "name", mavlink_msg_deprecated_name_property())
+
+
+class MAVLink_param_value_message(MAVLink_message):
+    """
+    Emit the value of a onboard parameter. The inclusion of
+    param_count and param_index in the message allows the recipient to
+    keep track of received parameters and allows him to re-request
+    missing parameters after a loss or timeout. The parameter
+    microservice is documented at
+    https://mavlink.io/en/services/parameter.html
+    """
+
+    id = MAVLINK_MSG_ID_PARAM_VALUE
+    msgname = "PARAM_VALUE"
+    fieldnames = ["param_id", "param_value", "param_type", "param_count", "param_index"]
+    ordered_fieldnames = ["param_value", "param_count", "param_index", "param_id", "param_type"]
+    fieldtypes = ["char", "float", "uint8_t", "uint16_t", "uint16_t"]
+    fielddisplays_by_name: Dict[str, str] = {}
+    fieldenums_by_name: Dict[str, str] = {"param_type": "MAV_PARAM_TYPE"}
+    fieldunits_by_name: Dict[str, str] = {}
+    native_format = bytearray(b"<fHHcB")
+    orders = [3, 0, 4, 1, 2]
+    lengths = [1, 1, 1, 1, 1]
+    array_lengths = [0, 0, 0, 16, 0]
+    crc_extra = 220
+    unpacker = struct.Struct("<fHH16sB")
+    instance_field = None
+    instance_offset = -1
+
+    def __init__(self, param_id: bytes, param_value: float, param_type: int, param_count: int, param_index: int):
+        MAVLink_message.__init__(self, MAVLink_param_value_message.id, MAVLink_param_value_message.msgname)
+        self._fieldnames = MAVLink_param_value_message.fieldnames
+        self._instance_field = MAVLink_param_value_message.instance_field
+        self._instance_offset = MAVLink_param_value_message.instance_offset
+        self._param_id_raw = param_id
+        self.param_id = param_id.split(b"\x00", 1)[0].decode("ascii", errors="replace")
+        self.param_value = param_value
+        self.param_type = param_type
+        self.param_count = param_count
+        self.param_index = param_index
+
+    def pack(self, mav: "MAVLink", force_mavlink1: bool = False) -> bytes:
+        return self._pack(mav, self.crc_extra, self.unpacker.pack(self.param_value, self.param_count, self.param_index, self._param_id_raw, self.param_type), force_mavlink1=force_mavlink1)
+
+
+# Define name on the class for backwards compatibility (it is now msgname).
+# Done with setattr to hide the class variable from mypy.
+setattr(MAVLink_param_value_message, "name", mavlink_msg_deprecated_name_property())
 
 
 class MAVLink_global_position_int_message(MAVLink_message):
@@ -2062,6 +2228,66 @@ class MAVLink_command_ack_message(MAVLink_message):
 setattr(MAVLink_command_ack_message, "name", mavlink_msg_deprecated_name_property())
 
 
+class MAVLink_home_position_message(MAVLink_message):
+    """
+    Contains the home position.         The home position is the
+    default position that the system will return to and land on.
+    The position must be set automatically by the system during the
+    takeoff, and may also be explicitly set using MAV_CMD_DO_SET_HOME.
+    The global and local positions encode the position in the
+    respective coordinate frames, while the q parameter encodes the
+    orientation of the surface.         Under normal conditions it
+    describes the heading and terrain slope, which can be used by the
+    aircraft to adjust the approach.         The approach 3D vector
+    describes the point to which the system should fly in normal
+    flight mode and then perform a landing sequence along the vector.
+    Note: this message can be requested by sending the
+    MAV_CMD_REQUEST_MESSAGE with param1=242.
+    """
+
+    id = MAVLINK_MSG_ID_HOME_POSITION
+    msgname = "HOME_POSITION"
+    fieldnames = ["latitude", "longitude", "altitude", "x", "y", "z", "q", "approach_x", "approach_y", "approach_z", "time_usec"]
+    ordered_fieldnames = ["latitude", "longitude", "altitude", "x", "y", "z", "q", "approach_x", "approach_y", "approach_z", "time_usec"]
+    fieldtypes = ["int32_t", "int32_t", "int32_t", "float", "float", "float", "float", "float", "float", "float", "uint64_t"]
+    fielddisplays_by_name: Dict[str, str] = {}
+    fieldenums_by_name: Dict[str, str] = {}
+    fieldunits_by_name: Dict[str, str] = {"latitude": "degE7", "longitude": "degE7", "altitude": "mm", "x": "m", "y": "m", "z": "m", "approach_x": "m", "approach_y": "m", "approach_z": "m", "time_usec": "us"}
+    native_format = bytearray(b"<iiifffffffQ")
+    orders = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10]
+    lengths = [1, 1, 1, 1, 1, 1, 4, 1, 1, 1, 1]
+    array_lengths = [0, 0, 0, 0, 0, 0, 4, 0, 0, 0, 0]
+    crc_extra = 104
+    unpacker = struct.Struct("<iiifff4ffffQ")
+    instance_field = None
+    instance_offset = -1
+
+    def __init__(self, latitude: int, longitude: int, altitude: int, x: float, y: float, z: float, q: Sequence[float], approach_x: float, approach_y: float, approach_z: float, time_usec: int = 0):
+        MAVLink_message.__init__(self, MAVLink_home_position_message.id, MAVLink_home_position_message.msgname)
+        self._fieldnames = MAVLink_home_position_message.fieldnames
+        self._instance_field = MAVLink_home_position_message.instance_field
+        self._instance_offset = MAVLink_home_position_message.instance_offset
+        self.latitude = latitude
+        self.longitude = longitude
+        self.altitude = altitude
+        self.x = x
+        self.y = y
+        self.z = z
+        self.q = q
+        self.approach_x = approach_x
+        self.approach_y = approach_y
+        self.approach_z = approach_z
+        self.time_usec = time_usec
+
+    def pack(self, mav: "MAVLink", force_mavlink1: bool = False) -> bytes:
+        return self._pack(mav, self.crc_extra, self.unpacker.pack(self.latitude, self.longitude, self.altitude, self.x, self.y, self.z, self.q[0], self.q[1], self.q[2], self.q[3], self.approach_x, self.approach_y, self.approach_z, self.time_usec), force_mavlink1=force_mavlink1)
+
+
+# Define name on the class for backwards compatibility (it is now msgname).
+# Done with setattr to hide the class variable from mypy.
+setattr(MAVLink_home_position_message, "name", mavlink_msg_deprecated_name_property())
+
+
 class MAVLink_statustext_message(MAVLink_message):
     """
     Human-readable status line. Longer texts may be split into chunks
@@ -2192,6 +2418,8 @@ setattr(MAVLink_control_status_message, "name", mavlink_msg_deprecated_name_prop
 
 mavlink_map: Dict[int, Type[MAVLink_message]] = {
     MAVLINK_MSG_ID_HEARTBEAT: MAVLink_heartbeat_message,
+    MAVLINK_MSG_ID_PARAM_REQUEST_READ: MAVLink_param_request_read_message,
+    MAVLINK_MSG_ID_PARAM_VALUE: MAVLink_param_value_message,
     MAVLINK_MSG_ID_GLOBAL_POSITION_INT: MAVLink_global_position_int_message,
     MAVLINK_MSG_ID_MISSION_REQUEST_PARTIAL_LIST: MAVLink_mission_request_partial_list_message,
     MAVLINK_MSG_ID_MISSION_WRITE_PARTIAL_LIST: MAVLink_mission_write_partial_list_message,
@@ -2210,6 +2438,7 @@ mavlink_map: Dict[int, Type[MAVLink_message]] = {
     MAVLINK_MSG_ID_COMMAND_INT: MAVLink_command_int_message,
     MAVLINK_MSG_ID_COMMAND_LONG: MAVLink_command_long_message,
     MAVLINK_MSG_ID_COMMAND_ACK: MAVLink_command_ack_message,
+    MAVLINK_MSG_ID_HOME_POSITION: MAVLink_home_position_message,
     MAVLINK_MSG_ID_STATUSTEXT: MAVLink_statustext_message,
     MAVLINK_MSG_ID_SETUP_SIGNING: MAVLink_setup_signing_message,
     MAVLINK_MSG_ID_CONTROL_STATUS: MAVLink_control_status_message,
@@ -2640,6 +2869,80 @@ class MAVLink(object):
 
         """
         self.send(self.heartbeat_encode(type, autopilot, base_mode, custom_mode, system_status, mavlink_version), force_mavlink1=force_mavlink1)
+
+    def param_request_read_encode(self, target_system: int, target_component: int, param_id: bytes, param_index: int) -> MAVLink_param_request_read_message:
+        """
+        Request to read the onboard parameter with the param_id string id.
+        Onboard parameters are stored as key[const char*] ->
+        value[float]. This allows to send a parameter to any other
+        component (such as the GCS) without the need of previous
+        knowledge of possible parameter names. Thus the same GCS can
+        store different parameters for different autopilots. See also
+        https://mavlink.io/en/services/parameter.html for a full
+        documentation of QGroundControl and IMU code.
+
+        target_system             : System ID (type:uint8_t)
+        target_component          : Component ID (type:uint8_t)
+        param_id                  : Onboard parameter id, terminated by NULL if the length is less than 16 human-readable chars and WITHOUT null termination (NULL) byte if the length is exactly 16 chars - applications have to provide 16+1 bytes storage if the ID is stored as string (type:char)
+        param_index               : Parameter index. Send -1 to use the param ID field as identifier (else the param id will be ignored) (type:int16_t)
+
+        """
+        return MAVLink_param_request_read_message(target_system, target_component, param_id, param_index)
+
+    def param_request_read_send(self, target_system: int, target_component: int, param_id: bytes, param_index: int, force_mavlink1: bool = False) -> None:
+        """
+        Request to read the onboard parameter with the param_id string id.
+        Onboard parameters are stored as key[const char*] ->
+        value[float]. This allows to send a parameter to any other
+        component (such as the GCS) without the need of previous
+        knowledge of possible parameter names. Thus the same GCS can
+        store different parameters for different autopilots. See also
+        https://mavlink.io/en/services/parameter.html for a full
+        documentation of QGroundControl and IMU code.
+
+        target_system             : System ID (type:uint8_t)
+        target_component          : Component ID (type:uint8_t)
+        param_id                  : Onboard parameter id, terminated by NULL if the length is less than 16 human-readable chars and WITHOUT null termination (NULL) byte if the length is exactly 16 chars - applications have to provide 16+1 bytes storage if the ID is stored as string (type:char)
+        param_index               : Parameter index. Send -1 to use the param ID field as identifier (else the param id will be ignored) (type:int16_t)
+
+        """
+        self.send(self.param_request_read_encode(target_system, target_component, param_id, param_index), force_mavlink1=force_mavlink1)
+
+    def param_value_encode(self, param_id: bytes, param_value: float, param_type: int, param_count: int, param_index: int) -> MAVLink_param_value_message:
+        """
+        Emit the value of a onboard parameter. The inclusion of param_count
+        and param_index in the message allows the recipient to keep
+        track of received parameters and allows him to re-request
+        missing parameters after a loss or timeout. The parameter
+        microservice is documented at
+        https://mavlink.io/en/services/parameter.html
+
+        param_id                  : Onboard parameter id, terminated by NULL if the length is less than 16 human-readable chars and WITHOUT null termination (NULL) byte if the length is exactly 16 chars - applications have to provide 16+1 bytes storage if the ID is stored as string (type:char)
+        param_value               : Onboard parameter value (type:float)
+        param_type                : Onboard parameter type. (type:uint8_t, values:MAV_PARAM_TYPE)
+        param_count               : Total number of onboard parameters (type:uint16_t)
+        param_index               : Index of this onboard parameter (type:uint16_t)
+
+        """
+        return MAVLink_param_value_message(param_id, param_value, param_type, param_count, param_index)
+
+    def param_value_send(self, param_id: bytes, param_value: float, param_type: int, param_count: int, param_index: int, force_mavlink1: bool = False) -> None:
+        """
+        Emit the value of a onboard parameter. The inclusion of param_count
+        and param_index in the message allows the recipient to keep
+        track of received parameters and allows him to re-request
+        missing parameters after a loss or timeout. The parameter
+        microservice is documented at
+        https://mavlink.io/en/services/parameter.html
+
+        param_id                  : Onboard parameter id, terminated by NULL if the length is less than 16 human-readable chars and WITHOUT null termination (NULL) byte if the length is exactly 16 chars - applications have to provide 16+1 bytes storage if the ID is stored as string (type:char)
+        param_value               : Onboard parameter value (type:float)
+        param_type                : Onboard parameter type. (type:uint8_t, values:MAV_PARAM_TYPE)
+        param_count               : Total number of onboard parameters (type:uint16_t)
+        param_index               : Index of this onboard parameter (type:uint16_t)
+
+        """
+        self.send(self.param_value_encode(param_id, param_value, param_type, param_count, param_index), force_mavlink1=force_mavlink1)
 
     def global_position_int_encode(self, time_boot_ms: int, lat: int, lon: int, alt: int, relative_alt: int, vx: int, vy: int, vz: int, hdg: int) -> MAVLink_global_position_int_message:
         """
@@ -3204,6 +3507,74 @@ class MAVLink(object):
 
         """
         self.send(self.command_ack_encode(command, result, progress, result_param2, target_system, target_component), force_mavlink1=force_mavlink1)
+
+    def home_position_encode(self, latitude: int, longitude: int, altitude: int, x: float, y: float, z: float, q: Sequence[float], approach_x: float, approach_y: float, approach_z: float, time_usec: int = 0) -> MAVLink_home_position_message:
+        """
+        Contains the home position.         The home position is the default
+        position that the system will return to and land on.
+        The position must be set automatically by the system during
+        the takeoff, and may also be explicitly set using
+        MAV_CMD_DO_SET_HOME.         The global and local positions
+        encode the position in the respective coordinate frames, while
+        the q parameter encodes the orientation of the surface.
+        Under normal conditions it describes the heading and terrain
+        slope, which can be used by the aircraft to adjust the
+        approach.         The approach 3D vector describes the point
+        to which the system should fly in normal flight mode and then
+        perform a landing sequence along the vector.         Note:
+        this message can be requested by sending the
+        MAV_CMD_REQUEST_MESSAGE with param1=242.
+
+        latitude                  : Latitude (WGS84) [degE7] (type:int32_t)
+        longitude                 : Longitude (WGS84) [degE7] (type:int32_t)
+        altitude                  : Altitude (MSL). Positive for up. [mm] (type:int32_t)
+        x                         : Local X position of this position in the local coordinate frame (NED) [m] (type:float)
+        y                         : Local Y position of this position in the local coordinate frame (NED) [m] (type:float)
+        z                         : Local Z position of this position in the local coordinate frame (NED: positive "down") [m] (type:float)
+        q                         : Quaternion indicating world-to-surface-normal and heading transformation of the takeoff position.
+        Used to indicate the heading and slope of the ground.
+        All fields should be set to NaN if an accurate quaternion for both heading and surface slope cannot be supplied. (type:float)
+        approach_x                : Local X position of the end of the approach vector. Multicopters should set this position based on their takeoff path. Grass-landing fixed wing aircraft should set it the same way as multicopters. Runway-landing fixed wing aircraft should set it to the opposite direction of the takeoff, assuming the takeoff happened from the threshold / touchdown zone. [m] (type:float)
+        approach_y                : Local Y position of the end of the approach vector. Multicopters should set this position based on their takeoff path. Grass-landing fixed wing aircraft should set it the same way as multicopters. Runway-landing fixed wing aircraft should set it to the opposite direction of the takeoff, assuming the takeoff happened from the threshold / touchdown zone. [m] (type:float)
+        approach_z                : Local Z position of the end of the approach vector. Multicopters should set this position based on their takeoff path. Grass-landing fixed wing aircraft should set it the same way as multicopters. Runway-landing fixed wing aircraft should set it to the opposite direction of the takeoff, assuming the takeoff happened from the threshold / touchdown zone. [m] (type:float)
+        time_usec                 : Timestamp (UNIX Epoch time or time since system boot). The receiving end can infer timestamp format (since 1.1.1970 or since system boot) by checking for the magnitude of the number. [us] (type:uint64_t)
+
+        """
+        return MAVLink_home_position_message(latitude, longitude, altitude, x, y, z, q, approach_x, approach_y, approach_z, time_usec)
+
+    def home_position_send(self, latitude: int, longitude: int, altitude: int, x: float, y: float, z: float, q: Sequence[float], approach_x: float, approach_y: float, approach_z: float, time_usec: int = 0, force_mavlink1: bool = False) -> None:
+        """
+        Contains the home position.         The home position is the default
+        position that the system will return to and land on.
+        The position must be set automatically by the system during
+        the takeoff, and may also be explicitly set using
+        MAV_CMD_DO_SET_HOME.         The global and local positions
+        encode the position in the respective coordinate frames, while
+        the q parameter encodes the orientation of the surface.
+        Under normal conditions it describes the heading and terrain
+        slope, which can be used by the aircraft to adjust the
+        approach.         The approach 3D vector describes the point
+        to which the system should fly in normal flight mode and then
+        perform a landing sequence along the vector.         Note:
+        this message can be requested by sending the
+        MAV_CMD_REQUEST_MESSAGE with param1=242.
+
+        latitude                  : Latitude (WGS84) [degE7] (type:int32_t)
+        longitude                 : Longitude (WGS84) [degE7] (type:int32_t)
+        altitude                  : Altitude (MSL). Positive for up. [mm] (type:int32_t)
+        x                         : Local X position of this position in the local coordinate frame (NED) [m] (type:float)
+        y                         : Local Y position of this position in the local coordinate frame (NED) [m] (type:float)
+        z                         : Local Z position of this position in the local coordinate frame (NED: positive "down") [m] (type:float)
+        q                         : Quaternion indicating world-to-surface-normal and heading transformation of the takeoff position.
+        Used to indicate the heading and slope of the ground.
+        All fields should be set to NaN if an accurate quaternion for both heading and surface slope cannot be supplied. (type:float)
+        approach_x                : Local X position of the end of the approach vector. Multicopters should set this position based on their takeoff path. Grass-landing fixed wing aircraft should set it the same way as multicopters. Runway-landing fixed wing aircraft should set it to the opposite direction of the takeoff, assuming the takeoff happened from the threshold / touchdown zone. [m] (type:float)
+        approach_y                : Local Y position of the end of the approach vector. Multicopters should set this position based on their takeoff path. Grass-landing fixed wing aircraft should set it the same way as multicopters. Runway-landing fixed wing aircraft should set it to the opposite direction of the takeoff, assuming the takeoff happened from the threshold / touchdown zone. [m] (type:float)
+        approach_z                : Local Z position of the end of the approach vector. Multicopters should set this position based on their takeoff path. Grass-landing fixed wing aircraft should set it the same way as multicopters. Runway-landing fixed wing aircraft should set it to the opposite direction of the takeoff, assuming the takeoff happened from the threshold / touchdown zone. [m] (type:float)
+        time_usec                 : Timestamp (UNIX Epoch time or time since system boot). The receiving end can infer timestamp format (since 1.1.1970 or since system boot) by checking for the magnitude of the number. [us] (type:uint64_t)
+
+        """
+        self.send(self.home_position_encode(latitude, longitude, altitude, x, y, z, q, approach_x, approach_y, approach_z, time_usec), force_mavlink1=force_mavlink1)
 
     def statustext_encode(self, severity: int, text: bytes, id: int = 0, chunk_seq: int = 0) -> MAVLink_statustext_message:
         """
