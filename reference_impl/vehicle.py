@@ -62,6 +62,8 @@ class VehicleConfig:
     require_signature: bool = False
     # HEARTBEAT.autopilot (MAV_AUTOPILOT): GCSs adapt to it (generic 7, ArduPilot 3, PX4 12)
     autopilot: int = _d.MAV_AUTOPILOT_GENERIC_MISSION_FULL
+    # HEARTBEAT.type (MAV_TYPE): what flies; vehicle_class.py says how (a ground vehicle never climbs)
+    vehicle_type: int = _d.MAV_TYPE_QUADROTOR
     # HEARTBEAT.custom_mode on the ground / while flying the mission, in the autopilot's own
     # numbering (GCSs show it as the flight mode); 0 for the generic autopilot, which has none
     custom_mode_idle: int = 0
@@ -324,7 +326,7 @@ class VehicleNode:
     def _heartbeat(self) -> Any:
         cfg, flying = self.config, self.flight.flying
         return _d.MAVLink_heartbeat_message(
-            _d.MAV_TYPE_QUADROTOR, cfg.autopilot, MODE_FLAGS_FLYING if flying else MODE_FLAGS_IDLE,
+            cfg.vehicle_type, cfg.autopilot, MODE_FLAGS_FLYING if flying else MODE_FLAGS_IDLE,
             cfg.custom_mode_mission if flying else cfg.custom_mode_idle,
             _d.MAV_STATE_ACTIVE if flying else _d.MAV_STATE_STANDBY, 3)
 

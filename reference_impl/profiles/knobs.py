@@ -178,6 +178,21 @@ def _nan_params(v: Any) -> dict[int, frozenset[int]]:
     return table
 
 
+_MAV_TYPE_BY_NAME = {e.name.removeprefix("MAV_TYPE_"): value for value, e in _d.enums["MAV_TYPE"].items()
+                     if not e.name.endswith("_ENUM_END")}
+
+
+def _mav_type(v: Any) -> int:
+    """vehicle_type = a MAV_TYPE by name (with or without MAV_TYPE_, e.g. "FIXED_WING") or number."""
+    if isinstance(v, str):
+        value = _MAV_TYPE_BY_NAME.get(v.upper().removeprefix("MAV_TYPE_"))
+        if value is None:
+            raise ValueError(f"{v!r} is no MAV_TYPE of the upstream common.xml (e.g. QUADROTOR, FIXED_WING, "
+                             "VTOL_FIXEDROTOR, GROUND_ROVER; or give its number)")
+        return value
+    return _count(0, 255)(v)
+
+
 def _metres(v: Any) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
         raise ValueError(f"expected a number of metres > 0, got {v!r}")
@@ -265,6 +280,10 @@ _KNOBS = (
          "HEARTBEAT.custom_mode while flying the mission (the autopilot's own mode number)"),
     Knob("single_peer_link", CONFIG, "single_peer_link", _bool,
          "the GCS link is bound to the first peer address: other senders are never read"),
+    # --- the vehicle model: what flies, and how the autopilot flies it (issue 23) ---
+    Knob("vehicle_type", CONFIG, "vehicle_type", _mav_type,
+         "HEARTBEAT.type (MAV_TYPE, by name or number); its class (vehicle_class.py) says how it flies: "
+         "a ground vehicle never climbs (default QUADROTOR)"),
 )
 
 KNOBS: dict[str, Knob] = {k.name: k for k in _KNOBS}
