@@ -79,12 +79,13 @@ class MissionProgress:
         self._repeat = None
         return self.announce(now)
 
-    def reached(self, seq: int, now: float) -> list[Send]:
-        """The vehicle reached item `seq`: say so, then move on to the next item."""
+    def reached(self, seq: int, now: float, *, ends: bool = False) -> list[Send]:
+        """The vehicle reached item `seq`: say so, then move on to the next item (`ends`: the
+        mission is over at this item, as after a landing, whatever follows it)."""
         out = [Send(m.item_reached_message(seq))]
         if self.reached_repeats > 1:
             self._repeat = (seq, self.reached_repeats - 1, now + REACHED_REPEAT_PERIOD)
-        if seq + 1 < self.store.count(MissionType.MISSION):
+        if seq + 1 < self.store.count(MissionType.MISSION) and not ends:
             self.seq = seq + 1
         else:
             self.running, self.complete = False, True
