@@ -123,6 +123,9 @@ class ServerBehaviour:
     set_current_only_idle: bool = False
     # MISSION_ITEM_REACHED is sent this many times for each item reached, 1 s apart.
     item_reached_repeats: int = 1
+    # MISSION_ITEM_REACHED waits in one slot until the next send opportunity (progress.py
+    # REACHED_SLOT_DELAY): an item reached meanwhile replaces it, so only the later is sent.
+    item_reached_one_slot: bool = False
 
     # --- framing and warnings -------------------------------------------------------------
     # Plan types whose transfers need MAVLink 2: a MAVLink 1 frame about them gets

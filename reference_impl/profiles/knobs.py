@@ -270,6 +270,9 @@ _KNOBS = (
     Knob("set_current_only_idle", BEHAVIOUR, "set_current_only_idle", _bool, "MISSION_SET_CURRENT is refused during a transfer"),
     Knob("item_reached_repeats", BEHAVIOUR, "item_reached_repeats", _count(1, 100),
          "MISSION_ITEM_REACHED is sent this many times, 1 s apart"),
+    Knob("item_reached_one_slot", BEHAVIOUR, "item_reached_one_slot", _bool,
+         "MISSION_ITEM_REACHED waits in one slot until the next send (0.25 s): an item reached meanwhile "
+         "(a DO command right after a waypoint) replaces it, so only the later one is reported"),
     Knob("mavlink2_types", BEHAVIOUR, "mavlink2_types", _types, "plan types whose transfers need MAVLink 2"),
     Knob("legacy_warnings", BEHAVIOUR, "legacy_warnings", _bool, "STATUSTEXT warning for MISSION_REQUEST / MISSION_ITEM"),
     # vehicle
