@@ -104,7 +104,9 @@ class ServerBehaviour:
     home_at_seq0: bool = False
     # How items are kept: "exact" (as received), or "compact15": a 15-byte command record
     # (altitude in whole cm, hold time in whole seconds, other waypoint params dropped,
-    # rally altitude in whole metres, *_INT frames reported as their plain frames).
+    # rally altitude in whole metres, *_INT frames reported as their plain frames), or
+    # "compact15-plane": ArduPlane's build of it (a waypoint keeps acceptance radius and pass-by
+    # distance as whole metres up to 255 instead of its hold time).
     item_storage: str = "exact"
     # A downloaded mission item carries current=1 exactly when it is the current item
     # (False: the flag is 0 on every item, whatever is current).

@@ -263,7 +263,9 @@ _KNOBS = (
     Knob("download_current_flag", BEHAVIOUR, "download_current_flag", _bool,
          "a downloaded mission item has current=1 exactly when it is the current item (false: never)"),
     Knob("home_at_seq0", BEHAVIOUR, "home_at_seq0", _bool, "mission item 0 is the vehicle's home"),
-    Knob("item_storage", BEHAVIOUR, "item_storage", _storage, "how items are kept: exact or compact15"),
+    Knob("item_storage", BEHAVIOUR, "item_storage", _storage,
+         "how items are kept: exact, compact15 (ArduPilot's 15-byte record) or compact15-plane "
+         "(ArduPlane's: a waypoint keeps its radius and pass-by distance, not its hold time)"),
     Knob("opaque_id_fields", BEHAVIOUR, "opaque_id_fields", _bool, "plan ids are reported (false: the older dialect)"),
     Knob("clear_all_supported", BEHAVIOUR, "clear_all_supported", _bool, "MISSION_CLEAR_ALL with MAV_MISSION_TYPE_ALL works"),
     Knob("clear_while_flying", BEHAVIOUR, "clear_while_flying", _bool, "the mission may be cleared while flown"),
