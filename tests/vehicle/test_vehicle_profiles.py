@@ -19,7 +19,7 @@ from mavconform.reference_impl.profiles import BUILTIN_PROFILES, KNOBS, load_pro
 from mavconform.reference_impl.profiles.knobs import FLIGHT
 
 from ..profiles.profile_files import write_profile
-from .pilot import Pilot
+from .pilot import BARE_WAYPOINTS, Pilot
 
 VEHICLE_PROFILES = ("px4-fixedwing", "px4-vtol", "ardupilot-plane", "ardupilot-rover")
 VARIANT = re.compile(r"^(HB|[APL]\d+'?)$")
@@ -111,3 +111,12 @@ def test_a_user_profile_flies_a_vehicle_of_its_own(tmp_path):
     assert mine.config.flight_rules.mode_of(ModeKind.MISSION).name == "AUTO.MISSION"
     p = Pilot(mine.config)
     assert p.set_mode(4, 4) == R.ACCEPTED and p.arm() == R.TEMPORARILY_REJECTED
+
+
+def test_custom_mode_idle_and_mission_still_name_the_mode_of_a_vehicle_without_a_mode_table(tmp_path):
+    path = write_profile(tmp_path, 'name = "mine"\n[[knob]]\nknob = "custom_mode_idle"\nvalue = 7\n'
+                                   '[[knob]]\nknob = "custom_mode_mission"\nvalue = 9\n')
+    p = Pilot(load_profile(path).config)
+    assert p.mode() == 7 and p.set_mode(9) == R.UNSUPPORTED
+    p.upload(BARE_WAYPOINTS)
+    assert p.command(Cmd.MISSION_START, 0, 0) == R.ACCEPTED and p.mode() == 9 and p.armed()
