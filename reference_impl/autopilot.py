@@ -92,12 +92,12 @@ class Autopilot:
         rules = self.rules
         if not rules.modes:
             return R.UNSUPPORTED, []
-        if not int(msg.param1) & FLAG_CUSTOM:   # ArduPilot _set_mode_common; PX4's base-mode form is not modelled
+        if not _whole(msg.param1) & FLAG_CUSTOM:   # ArduPilot _set_mode_common; PX4's base-mode form is not modelled
             return R.DENIED, []
-        if rules.set_mode_params == "px4":
-            number = (int(msg.param2) & 0xFF) << 16 | (int(msg.param3) & 0xFF) << 24
+        if rules.set_mode_params == "px4":          # uint8 casts, as Commander.cpp does
+            number = (_whole(msg.param2) & 0xFF) << 16 | (_whole(msg.param3) & 0xFF) << 24
         else:
-            number = int(msg.param2) if math.isfinite(msg.param2) else -1
+            number = _whole(msg.param2, -1)
         mode = rules.mode_numbered(number)
         if mode is None:
             return rules.refusal, []
@@ -167,7 +167,8 @@ class Autopilot:
 
     def _takeoff(self, msg: Any, source: Peer, now: float) -> tuple[int, list[Send]]:
         rules, how = self.rules, self.rules.takeoff_command
-        altitude = msg.param7 if math.isfinite(msg.param7) and msg.param7 > 0 else rules.takeoff_altitude
+        named = _param7(msg)
+        altitude = named if math.isfinite(named) and named > 0 else rules.takeoff_altitude
         if how == "unsupported":
             return R.UNSUPPORTED, []
         if how == "refused":
@@ -181,13 +182,13 @@ class Autopilot:
             return result, out
         # guided-climb: armed, on the ground, in a guided mode, to an altitude it names (ArduCopter takeoff.cpp)
         if (self.mode is None or self.mode.kind is not ModeKind.GUIDED or not self._may_fly()
-                or self.flight.airborne(now) or not (math.isfinite(msg.param7) and msg.param7 > 0)):
+                or self.flight.airborne(now) or not (math.isfinite(named) and named > 0)):
             return rules.refusal, []
-        self.flight.climb(msg.param7, now)
+        self.flight.climb(named, now)
         return R.ACCEPTED, []
 
     def _home(self, msg: Any, source: Peer, now: float) -> tuple[int, list[Send]]:
-        if msg.command == Cmd.REQUEST_MESSAGE and int(msg.param1) != _d.MAVLINK_MSG_ID_HOME_POSITION:
+        if msg.command == Cmd.REQUEST_MESSAGE and _whole(msg.param1, -1) != _d.MAVLINK_MSG_ID_HOME_POSITION:
             return R.UNSUPPORTED, []
         home = self.flight.home
         return R.ACCEPTED, [Send(vehicle_info.home_position_message(home.lat, home.lon, home.alt, now), source)]
@@ -361,6 +362,16 @@ class Autopilot:
         if len(chunks[-1]) == STATUSTEXT_LEN:
             chunks.append(b"")            # so the last chunk has its NUL
         return [Send(_d.MAVLink_statustext_message(severity, c, self._text_id, i)) for i, c in enumerate(chunks)]
+
+
+def _whole(value: float, otherwise: int = 0) -> int:
+    """A float param as the integer it carries (truncated), `otherwise` for NaN or infinity."""
+    return int(value) if math.isfinite(value) else otherwise
+
+
+def _param7(msg: Any) -> float:
+    """Param 7 of a COMMAND_LONG, or the z of a COMMAND_INT (where it travels)."""
+    return msg.param7 if hasattr(msg, "param7") else msg.z
 
 
 def _mode_command(kind: ModeKind) -> Any:

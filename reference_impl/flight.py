@@ -191,13 +191,13 @@ class FlightSim:
 
     def climb(self, altitude: float, now: float) -> None:
         """A take-off outside the mission (MAV_CMD_NAV_TAKEOFF in a guided mode): straight up to
-        `altitude` above home at `CLIMB_SPEED`, then hold there until `start` (a ground
-        vehicle stays where it is)."""
+        `altitude` above home at `CLIMB_SPEED` (never down), then hold there until `start` (a
+        ground vehicle stays where it is)."""
         here = self.where(now)
         self._move_to(here)
         self.progress.running = False
         self._arrive_at = None
-        top = Position(here.lat, here.lon, here.alt if self.ground else self.home.alt + altitude)
+        top = Position(here.lat, here.lon, here.alt if self.ground else max(here.alt, self.home.alt + altitude))
         self._start_divert(_Path(here, now).to(top, abs(top.alt - here.alt) / CLIMB_SPEED), top, False)
 
     def hold(self, now: float) -> None:

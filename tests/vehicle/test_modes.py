@@ -76,3 +76,24 @@ def test_the_spec_vehicle_has_no_modes_arming_or_flight_commands_and_is_armed_wh
     assert beat.base_mode & ARMED and beat.system_status == d.MAV_STATE_ACTIVE and beat.custom_mode == 0
     assert p.run_until(lambda: 1 in p.reached(), timeout=60)
     assert not p.armed()                        # the mission is over: it no longer flies
+
+
+ODD = [float("nan"), float("inf"), float("-inf"), 1e30, -1.0, 0.0, 1.0, 21196.0]
+HANDLED = [Cmd.DO_SET_MODE, Cmd.COMPONENT_ARM_DISARM, Cmd.MISSION_START, Cmd.NAV_TAKEOFF, Cmd.NAV_VTOL_TAKEOFF,
+           Cmd.NAV_RETURN_TO_LAUNCH, Cmd.NAV_LAND, Cmd.NAV_VTOL_LAND, Cmd.REQUEST_MESSAGE, Cmd.GET_HOME_POSITION]
+
+
+@pytest.mark.parametrize("name", sorted(IDENTITY))
+def test_any_params_as_command_long_or_command_int_get_one_answer(name):
+    """Fuzzers and careless GCSs send NaN, infinities and huge values: every command the
+    autopilot handles is answered, once, whatever its params, in either command message."""
+    p = Pilot(name)
+    p.upload(BARE_WAYPOINTS)
+    for command in HANDLED:
+        for value in ODD:
+            assert p.command(command, value, value, value, 0, 0, 0, value) in set(R), (command, value)
+            start = len(p.gcs.received)
+            p.gcs.send(d.MAVLink_command_int_message(1, 1, 3, command, 0, 0, value, value, value, 0, 0, 0, value))
+            p.run(0.2)
+            acks = [x for x in p.gcs.received[start:] if x.get_type() == "COMMAND_ACK" and x.command == command]
+            assert len(acks) == 1, (command, value)
