@@ -148,7 +148,9 @@ class Autopilot:
         if how == "mission-mode":
             if msg.param1 != 0 or msg.param2 != 0:   # first/last item not supported
                 return R.DENIED, []
-            return self._change_mode(mission, now) if self.mode is not mission else (R.ACCEPTED, self._fly_if_armed(now))
+            if self.mode is mission:
+                return R.ACCEPTED, self._fly_if_armed(now)
+            return self._change_mode(mission, now)
         # mission-mode-and-arm
         count = flight.store.count(MISSION)
         if not count or self._plan_unflyable():
@@ -248,7 +250,8 @@ class Autopilot:
             self.events.append(f"mode {mode.name}")
         self.mode = mode
         kind, flight = mode.kind, self.flight
-        if not self._may_fly() or not (flight.flying or flight.airborne(now) or kind in (ModeKind.MISSION, ModeKind.TAKEOFF)):
+        moves_by_itself = kind in (ModeKind.MISSION, ModeKind.TAKEOFF)
+        if not self._may_fly() or not (flight.flying or flight.airborne(now) or moves_by_itself):
             return []        # on the ground and not flying: a mode change moves nothing
         if kind is ModeKind.MISSION:
             return self._fly_if_armed(now)
@@ -303,7 +306,8 @@ class Autopilot:
         self.flight.stop(now)
         reset = self.rules.disarm_resets_mission
         in_mission = self.mode is not None and self.mode.kind is ModeKind.MISSION
-        if self.flight.store.count(MISSION) and (reset == "always" or (reset == "outside-mission-mode" and not in_mission)):
+        resets = reset == "always" or (reset == "outside-mission-mode" and not in_mission)
+        if resets and self.flight.store.count(MISSION):
             self._complete_seen = False
             self.progress.complete = False
             return self.progress.set_current(self.progress.first_seq, now)
@@ -349,7 +353,8 @@ class Autopilot:
             return []
         mode = self.mode.name if self.mode is not None else ""
         news = event.endswith("-disarmed") or (event.startswith("mission-") and not event.endswith("-refused"))
-        return self._statustext(_d.MAV_SEVERITY_INFO if news else _d.MAV_SEVERITY_CRITICAL, text.replace("{mode}", mode))
+        severity = _d.MAV_SEVERITY_INFO if news else _d.MAV_SEVERITY_CRITICAL
+        return self._statustext(severity, text.replace("{mode}", mode))
 
     def _statustext(self, severity: int, text: str) -> list[Send]:
         """One STATUSTEXT, or a text longer than its 50 bytes in chunks (upstream: the same

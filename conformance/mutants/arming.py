@@ -47,7 +47,9 @@ class IgnoresDisarm(Autopilot):
 
     def command(self, msg: Any, source: Peer, now: float) -> list[Send] | None:
         if msg.command == Cmd.COMPONENT_ARM_DISARM and msg.param1 == 0 and self._armed:
-            return [] if self.answer is None else [Send(m.command_ack_message(msg.command, self.answer, source), source)]
+            if self.answer is None:
+                return []
+            return [Send(m.command_ack_message(msg.command, self.answer, source), source)]
         return super().command(msg, source, now)
 
 

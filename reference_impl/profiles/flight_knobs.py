@@ -7,7 +7,8 @@ from __future__ import annotations
 import math
 from typing import Any, Callable
 
-from ..flight_rules import MISSION_RESETS, MISSION_STARTS, SET_MODE_ENCODINGS, TAKEOFF_COMMANDS, TEXT_EVENTS, Mode, ModeKind
+from ..flight_rules import (MISSION_RESETS, MISSION_STARTS, SET_MODE_ENCODINGS, TAKEOFF_COMMANDS, TEXT_EVENTS, Mode,
+                            ModeKind)
 from ..mission.constants import CommandResult
 from ..vehicle_info import PARAM_ID_LEN, Param
 from ..wire.dialect import mavlink as _d
@@ -25,7 +26,8 @@ def _flag(v: Any) -> bool:
 
 
 def _number(v: Any, what: str, *, low: float = 0.0, open_low: bool = True) -> float:
-    ok = not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v) and (v > low if open_low else v >= low)
+    number = not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v)
+    ok = number and (v > low if open_low else v >= low)
     if not ok:
         raise ValueError(f"expected {what} {'>' if open_low else '>='} {low:g}, got {v!r}")
     return float(v)

@@ -63,7 +63,8 @@ def test_a_landing_item_flies_over_its_spot_descends_and_ends_the_mission():
     f.start(0.0)
     assert reached(f.poll(2.0)) == [0]                   # 20 m up at home (20 m at 10 m/s)
     over = 2.0 + 100.0 / SPEED
-    assert f.where(over).alt == pytest.approx(20.0, abs=0.05) and north_of_home(f.where(over)) == pytest.approx(100, abs=0.5)
+    assert f.where(over).alt == pytest.approx(20.0, abs=0.05)
+    assert north_of_home(f.where(over)) == pytest.approx(100, abs=0.5)
     down = over + 20.0 / DESCENT_SPEED
     assert f.next_deadline() == pytest.approx(down, rel=1e-3)
     assert f.where((over + down) / 2).alt == pytest.approx(10.0, abs=0.1)
