@@ -282,9 +282,11 @@ _KNOBS = (
     # vehicle
     Knob("autopilot", CONFIG, "autopilot", _count(0, 255), "HEARTBEAT.autopilot (MAV_AUTOPILOT)"),
     Knob("custom_mode_idle", CONFIG, "custom_mode_idle", _count(0, 0xFFFFFFFF),
-         "HEARTBEAT.custom_mode when not flying the mission (the autopilot's own mode number)"),
+         "HEARTBEAT.custom_mode when not flying the mission (the autopilot's own mode number), "
+         "for a vehicle without modes"),
     Knob("custom_mode_mission", CONFIG, "custom_mode_mission", _count(0, 0xFFFFFFFF),
-         "HEARTBEAT.custom_mode while flying the mission (the autopilot's own mode number)"),
+         "HEARTBEAT.custom_mode while flying the mission (the autopilot's own mode number), "
+         "for a vehicle without modes"),
     Knob("single_peer_link", CONFIG, "single_peer_link", _bool,
          "the GCS link is bound to the first peer address: other senders are never read"),
     # --- the vehicle model: what flies, and how the autopilot flies it (issue 23) ---
