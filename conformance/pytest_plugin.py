@@ -21,8 +21,8 @@ _STATE: dict[str, Any] = {}
 def pytest_addoption(parser: pytest.Parser) -> None:
     g = parser.getgroup("mavconform", "MAVLink mission conformance (mavconform)")
     g.addoption("--mavlink-target", metavar="URI",
-                help="run the conformance clauses against URI (builtin:spec|px4|ardupilot, mutant:NAME, "
-                     "udp:HOST:PORT or udpin:[HOST:]PORT)")
+                help="run the conformance clauses against URI (builtin:PROFILE: spec, px4, ardupilot, ... "
+                     "(`mavconform profiles`); mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT)")
     g.addoption("--mavlink-clauses", default="*", metavar="GLOB", help="clause id globs (default all)")
     g.addoption("--mavlink-strict", action="store_true", help="SHOULD failures fail too")
     g.addoption("--mavlink-expect", metavar="NAME|FILE", help="expectations file of known deviations")

@@ -2,7 +2,9 @@
 
 - `builtin:spec`       our reference vehicle, in this process, over real UDP loopback;
   `builtin:px4`, `builtin:ardupilot`: the same with a PX4-like or ArduPilot-like profile
-                       (reference_impl/profiles, VARIANTS.md);
+                       (reference_impl/profiles, VARIANTS.md), and their other vehicle
+                       types: `builtin:px4-fixedwing`, `builtin:px4-vtol`,
+                       `builtin:ardupilot-plane`, `builtin:ardupilot-rover`;
 - `mutant:NAME`        a reference vehicle with one behaviour broken (the negative controls;
                        `mavconform clauses --mutants` lists them), also over loopback;
 - `udp:HOST:PORT`      a target listening at HOST:PORT; we send first (our HEARTBEAT);
@@ -63,7 +65,7 @@ from mavconform.reference_impl.net.uri import (FORMS as UDP_FORMS, SCHEMES as UD
                                                 parse_udp_uri)
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES
 
-FORMS = f"builtin:spec|px4|ardupilot, mutant:NAME, {UDP_FORMS}"
+FORMS = f"builtin:{'|'.join(BUILTIN_PROFILES)}, mutant:NAME, {UDP_FORMS}"
 
 # The system manager `builtin:spec` (and every HO mutant) runs under the suite: the reference
 # manager's defaults (1 Hz CONTROL_STATUS, 5 s owner loss, a 10 s takeover window), open to

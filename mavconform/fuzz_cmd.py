@@ -88,8 +88,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=DESCRIPTION, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--target", default="builtin:spec", metavar="URI",
-                   help="builtin:spec|px4|ardupilot, mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT "
-                        "(default builtin:spec)")
+                   help="builtin:PROFILE (spec, px4, ardupilot, ...: `mavconform profiles`), mutant:NAME, "
+                        "udp:HOST:PORT or udpin:[HOST:]PORT (default builtin:spec)")
     p.add_argument("--mode", choices=MODES, default="protocol", help="what to fuzz (default protocol)")
     p.add_argument("--examples", type=_count, metavar="N",
                    help=f"stop after N examples (default {DEFAULT_EXAMPLES} unless --time is given)")

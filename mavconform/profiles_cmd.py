@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps([_as_json(p) for p in profiles], indent=2))
         return 0
     for p in profiles:
-        print(f"{p.name:<10} {len(p.settings):>2} knobs  {p.description}")
+        print(f"{p.name:<15} {len(p.settings):>2} knobs  {p.description}")
     print("details: mavconform profiles --show NAME; targets: builtin:NAME; vehicle: "
           "mavconform vehicle --profile NAME|FILE")
     return 0

@@ -6,6 +6,15 @@ items at once (DO_JUMP jumps, with its repeat count), and reports through
 `MissionProgress`. Instead of ticking, it computes when the next item will be reached and
 asks to be woken then, so an hour of flight costs a handful of steps in virtual time.
 
+Take-off and landing are modelled as autopilots fly them (issue 23): a take-off item
+(NAV_TAKEOFF, NAV_VTOL_TAKEOFF) climbs to its altitude at `CLIMB_SPEED`, over its position or
+straight up where it has none; a landing item (NAV_LAND, NAV_VTOL_LAND) flies over its spot
+(or stays where it is) and descends to home's altitude at `DESCENT_SPEED`: it is reached on
+touching down (`landed_at`), and the mission ends there. A ground vehicle (`ground`) keeps
+home's altitude everywhere: it never climbs, and a landing item is one more place to drive to.
+The autopilot (autopilot.py) also makes the vehicle `hold` where it is, `climb` outside the
+mission (a guided take-off) and `stop` (disarmed).
+
 Two additions serve the emergency procedure (handover/emergency_procedure.py):
 - `divert(target, now)`: leave the mission (suspended: MISSION_CURRENT says paused), fly
   straight to `target` at cruise speed and altitude, then land there (descend at
@@ -33,7 +42,11 @@ from .mission.store import MissionStore
 EARTH_RADIUS_M = 6_371_000.0
 MIN_ITEM_TIME = 0.1  # s: every item takes some time, so a DO_JUMP loop cannot spin in place
 HOLD_COMMANDS = {Cmd.NAV_WAYPOINT: 1, Cmd.NAV_LOITER_TIME: 1, Cmd.NAV_DELAY: 1, Cmd.CONDITION_DELAY: 1}
-DESCENT_SPEED = 2.0  # m/s: a divert's landing (a typical autopilot land speed, well above its final flare)
+DESCENT_SPEED = 2.0  # m/s: a landing's descent (a typical autopilot land speed, well above its final flare)
+CLIMB_SPEED = 2.5    # m/s: a take-off's climb (ArduCopter WPNAV_SPEED_UP 250 cm/s; PX4 MPC_Z_V_AUTO_UP 3 m/s)
+AIRBORNE_MARGIN = 0.5   # m above home: off the ground
+TAKEOFF_COMMANDS = frozenset({Cmd.NAV_TAKEOFF, Cmd.NAV_VTOL_TAKEOFF})
+LAND_COMMANDS = frozenset({Cmd.NAV_LAND, Cmd.NAV_VTOL_LAND})
 
 
 def haversine_m(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
@@ -69,37 +82,69 @@ def _ground_distance(a: Position, b: Position) -> float:
     return 2 * EARTH_MEAN_RADIUS_M * math.asin(math.sqrt(min(1.0, h)))
 
 
+class _Path:
+    """Where a moving vehicle is: straight segments through timed points (a diagonal leg, a
+    climb, a flight over then a descent), held at the last point once it is passed."""
+
+    def __init__(self, start: Position, now: float) -> None:
+        self.knots: list[tuple[float, Position]] = [(now, start)]
+
+    def to(self, there: Position, seconds: float) -> _Path:
+        t, _ = self.knots[-1]
+        self.knots.append((t + max(0.0, seconds), there))
+        return self
+
+    @property
+    def end(self) -> float:
+        return self.knots[-1][0]
+
+    @property
+    def last(self) -> Position:
+        return self.knots[-1][1]
+
+    def at(self, now: float) -> Position:
+        knots = self.knots
+        for (t0, a), (t1, b) in zip(knots, knots[1:]):
+            if now < t1:
+                return _between(a, b, t0, t1, now)
+        return knots[-1][1] if now >= knots[0][0] else knots[0][1]
+
+
 class FlightSim:
     def __init__(self, store: MissionStore, progress: MissionProgress, *,
                  home: Position = Position(47.397742, 8.545594, 0.0), speed: float = 10.0,
-                 battery: FlightBattery | None = None) -> None:
+                 battery: FlightBattery | None = None, ground: bool = False) -> None:
         self.store = store
         self.progress = progress
         self.home = home
         self.speed = speed
         self.battery = battery
+        self.ground = ground             # a ground vehicle: every altitude is home's, it never climbs
         self.position = Position(home.lat, home.lon, home.alt)
         self.odometer_m = 0.0         # horizontal metres flown up to `position`
-        self._leg_start: Position | None = None
-        self._leg_started = 0.0
-        self._arrive_at: float | None = None
-        self._reach_at = 0.0             # when the current leg reaches its item (a hold follows)
+        self._path: _Path | None = None  # the current leg (mission item or divert); None: standing
+        self._arrive_at: float | None = None   # the mission's current item is done (its hold spent)
         self._jumps_left: dict[int, int] = {}
-        # a divert: the points still to fly through (the refuge, then the ground there), when
-        # the current one is reached; None when not diverting, [] when holding at the target
-        self._divert: list[Position] | None = None
+        # a divert: flying `_path` to the target (`_divert_arrive` its end), then landing there or
+        # holding (`_divert_arrive` None) until `start`
+        self._diverting = False
+        self._divert_knot = 0                  # the point of `_path` the divert heads for
         self._divert_arrive: float | None = None
         self.divert_target: Position | None = None
         self._landing = True
-        self.landed_at: float | None = None   # when the last divert touched down
+        self.landed_at: float | None = None   # when the vehicle last touched down (a divert's or a land item's landing)
 
     @property
     def flying(self) -> bool:
-        return self.progress.running or self._divert is not None
+        return self.progress.running or self._diverting
 
     @property
     def diverting(self) -> bool:
-        return self._divert is not None
+        return self._diverting
+
+    def airborne(self, now: float) -> bool:
+        """Off the ground at `now` (a ground vehicle never is)."""
+        return not self.ground and self.where(now).alt > self.home.alt + AIRBORNE_MARGIN
 
     def start(self, now: float) -> list[Send]:
         """MAV_CMD_MISSION_START: fly from the current item (ending a divert: the mission
@@ -107,9 +152,10 @@ class FlightSim:
         means there was no mission to fly."""
         if self.store.count(MissionType.MISSION) == 0:
             return []
-        if self._divert is not None:
-            self._move_to(self.where(now))
-            self._divert = self._divert_arrive = self.divert_target = None
+        if self._diverting:
+            self._end_divert(now)
+        elif self.progress.running:
+            self._move_to(self.where(now))   # started again mid-leg: from where it is
         self.progress.running, self.progress.complete = True, False
         self.progress.seq = max(self.progress.seq, self.progress.first_seq)   # past a home item
         self._jumps_left = {}
@@ -120,13 +166,13 @@ class FlightSim:
     def retarget(self, now: float) -> None:
         """The current item changed (set current, new plan): head for the new one. A divert
         goes on: the mission is suspended until `start`."""
-        if self._divert is not None:
+        if self._diverting:
             return
         if self.progress.running:
             self._move_to(self.where(now))
             self._plan_leg(now)
         else:
-            self._arrive_at = None
+            self._arrive_at = self._path = None
 
     def divert(self, target: Position, now: float, *, land: bool = True) -> None:
         """Leave the mission for `target`: straight there at cruise speed and the current
@@ -136,11 +182,37 @@ class FlightSim:
         self._move_to(here)
         self.progress.running = False
         self._arrive_at = None
-        legs = [Position(target.lat, target.lon, here.alt)]
+        above = Position(target.lat, target.lon, here.alt)
+        horizontal = _ground_distance(here, above)
+        path = _Path(here, now).to(above, horizontal / self.speed)
         if land:
-            legs.append(Position(target.lat, target.lon, self.home.alt))
-        self._divert, self.divert_target, self.landed_at, self._landing = legs, target, None, land
-        self._plan_divert_leg(now)
+            path.to(Position(target.lat, target.lon, self.home.alt), abs(here.alt - self.home.alt) / DESCENT_SPEED)
+        self._start_divert(path, target, land)
+
+    def climb(self, altitude: float, now: float) -> None:
+        """A take-off outside the mission (MAV_CMD_NAV_TAKEOFF in a guided mode): straight up to
+        `altitude` above home at `CLIMB_SPEED` (never down), then hold there until `start` (a
+        ground vehicle stays where it is)."""
+        here = self.where(now)
+        self._move_to(here)
+        self.progress.running = False
+        self._arrive_at = None
+        top = Position(here.lat, here.lon, here.alt if self.ground else max(here.alt, self.home.alt + altitude))
+        self._start_divert(_Path(here, now).to(top, abs(top.alt - here.alt) / CLIMB_SPEED), top, False)
+
+    def hold(self, now: float) -> None:
+        """Stop where the vehicle is and stay (a hover, a loiter, a rover's hold) until `start`."""
+        here = self.where(now)
+        self.divert(here, now, land=False)
+
+    def stop(self, now: float) -> None:
+        """Everything stops (the motors are off): the mission is suspended, any divert ends, and
+        the vehicle is on the ground where it is (disarmed in the air, it falls)."""
+        here = self.where(now)
+        self._move_to(Position(here.lat, here.lon, self.home.alt))
+        self.progress.running = False
+        self._arrive_at = self._path = None
+        self._diverting, self._divert_arrive, self.divert_target = False, None, None
 
     def distance_flown(self, now: float) -> float:
         """Horizontal metres flown since take-off (the battery's drain)."""
@@ -152,12 +224,12 @@ class FlightSim:
         return None if b is None else b.initial.after(self.distance_flown(now), b.model)
 
     def next_deadline(self) -> float | None:
-        if self._divert is not None:
+        if self._diverting:
             return self._divert_arrive
         return self._arrive_at if self.progress.running else None
 
     def poll(self, now: float) -> list[Send]:
-        if self._divert is not None:
+        if self._diverting:
             self._poll_divert(now)
             return []
         out: list[Send] = []
@@ -168,29 +240,26 @@ class FlightSim:
             if item is None:
                 self.progress.running = False
                 break
-            if item.command in POSITIONAL_COMMANDS and item.frame in GLOBAL_FRAMES:
-                self._move_to(Position(item.x / 1e7, item.y / 1e7, item.z))
-            seq = item.seq
-            out += self.progress.reached(seq, self._arrive_at)
+            arrived = self._arrive_at
+            if self._path is not None:
+                self._move_to(self._path.last)
+            landed = item.command in LAND_COMMANDS and not self.ground
+            out += self.progress.reached(item.seq, arrived, ends=landed)
+            if landed:                        # touched down: the mission is over
+                self.landed_at = arrived
+                self._arrive_at = self._path = None
+                break
             jump = self._jump_target(item)
             if jump is not None:
-                out += self.progress.set_current(jump, self._arrive_at)
+                out += self.progress.set_current(jump, arrived)
                 self.progress.running = True
-            self._plan_leg(self._arrive_at)
+            self._plan_leg(arrived)
         return out
 
     def where(self, now: float) -> Position:
-        if self._divert is not None:
-            if not self._divert or self._divert_arrive is None or self._leg_start is None:
-                return self.position
-            return _between(self._leg_start, self._divert[0], self._leg_started, self._divert_arrive, now)
-        if not self.progress.running or self._arrive_at is None or self._leg_start is None:
-            return self.position
-        item = self._current_item()
-        if item is None or item.command not in POSITIONAL_COMMANDS or item.frame not in GLOBAL_FRAMES:
-            return self.position
-        return _between(self._leg_start, Position(item.x / 1e7, item.y / 1e7, item.z), self._leg_started,
-                        self._reach_at, now)
+        if self._path is not None and (self._diverting or self.progress.running):
+            return self._path.at(now)
+        return self.position
 
     # --- internals ------------------------------------------------------------------------
     def _move_to(self, p: Position) -> None:
@@ -198,31 +267,29 @@ class FlightSim:
         self.odometer_m += _ground_distance(self.position, p)
         self.position = p
 
-    def _plan_divert_leg(self, now: float) -> None:
-        """Head for the next point of the divert: horizontally at cruise speed, down at the
-        descent speed."""
-        assert self._divert
-        here, there = self.position, self._divert[0]
-        horizontal = _ground_distance(here, there)
-        travel = horizontal / self.speed if horizontal > 0 else abs(there.alt - here.alt) / DESCENT_SPEED
-        self._leg_start, self._leg_started = here, now
-        self._divert_arrive = now + travel
+    def _start_divert(self, path: _Path, target: Position, land: bool) -> None:
+        """Fly `path`, waking at each of its points (over the target, then on the ground)."""
+        self._path, self._divert_knot, self._divert_arrive = path, 1, path.knots[1][0]
+        self._diverting, self.divert_target, self.landed_at, self._landing = True, target, None, land
+
+    def _end_divert(self, now: float) -> None:
+        self._move_to(self.where(now))
+        self._diverting, self._divert_arrive, self.divert_target, self._path = False, None, None, None
 
     def _poll_divert(self, now: float) -> None:
-        for _ in range(4):   # bounded: a divert has at most two points
-            if not self._divert or self._divert_arrive is None or now < self._divert_arrive:
+        for _ in range(len(self._path.knots) if self._path is not None else 0):   # bounded: one pass per point
+            if self._divert_arrive is None or now < self._divert_arrive or self._path is None:
                 return
-            arrived = self._divert_arrive
-            self._move_to(self._divert.pop(0))
-            if self._divert:
-                self._plan_divert_leg(arrived)
+            arrived, knots = self._divert_arrive, self._path.knots
+            self._move_to(knots[self._divert_knot][1])
+            self._divert_knot += 1
+            if self._divert_knot < len(knots):
+                self._divert_arrive = knots[self._divert_knot][0]
             elif self._landing:
-                self._divert = self._divert_arrive = None
+                self._diverting, self._divert_arrive, self._path = False, None, None
                 self.landed_at = arrived
-                return
             else:
                 self._divert_arrive = None   # holding at the target until `start`
-                return
 
     def _current_item(self) -> MissionItem | None:
         items = self.store.items(MissionType.MISSION)
@@ -232,17 +299,36 @@ class FlightSim:
     def _plan_leg(self, now: float) -> None:
         item = self._current_item()
         if item is None or not self.progress.running:
-            self._arrive_at = None
+            self._arrive_at = self._path = None
             return
-        travel = 0.0
-        if item.command in POSITIONAL_COMMANDS and item.frame in GLOBAL_FRAMES:
-            here = self.position
-            dist = haversine_m(here.lat, here.lon, item.x / 1e7, item.y / 1e7)
-            travel = math.hypot(dist, item.z - here.alt) / self.speed
+        path = self._leg(item, now)
         hold = item.param1 if item.command in HOLD_COMMANDS and math.isfinite(item.param1) else 0.0
-        self._leg_start, self._leg_started = Position(self.position.lat, self.position.lon, self.position.alt), now
-        self._reach_at = now + travel      # at the item; a hold is spent there, until _arrive_at
+        self._path = path
+        travel = 0.0 if path is None else path.end - now   # at the item; a hold is spent there, until _arrive_at
         self._arrive_at = now + max(MIN_ITEM_TIME, travel + max(0.0, hold))
+
+    def _leg(self, item: MissionItem, now: float) -> _Path | None:
+        """The way to `item` from where the vehicle is; None for an item done in place."""
+        if item.command not in POSITIONAL_COMMANDS or item.frame not in GLOBAL_FRAMES:
+            return None
+        here, ground = self.position, self.home.alt
+        lat, lon = item.x / 1e7, item.y / 1e7
+        if item.command in TAKEOFF_COMMANDS | LAND_COMMANDS and not (item.x or item.y):
+            lat, lon = here.lat, here.lon     # a take-off or landing with no place: where the vehicle is
+        path = _Path(here, now)
+        if self.ground:                     # drives there; altitudes mean nothing
+            there = Position(lat, lon, ground)
+            return path.to(there, _ground_distance(here, there) / self.speed)
+        if item.command in TAKEOFF_COMMANDS:   # climbs to the item's altitude (never descends)
+            top = Position(lat, lon, max(here.alt, item.z))
+            return path.to(top, max(_ground_distance(here, top) / self.speed, (top.alt - here.alt) / CLIMB_SPEED))
+        if item.command in LAND_COMMANDS:      # over the spot at the current altitude, then down
+            above = Position(lat, lon, here.alt)
+            path.to(above, _ground_distance(here, above) / self.speed)
+            return path.to(Position(lat, lon, ground), abs(here.alt - ground) / DESCENT_SPEED)
+        there = Position(lat, lon, item.z)
+        dist = haversine_m(here.lat, here.lon, there.lat, there.lon)
+        return path.to(there, math.hypot(dist, item.z - here.alt) / self.speed)
 
     def _jump_target(self, item: MissionItem) -> int | None:
         if item.command != Cmd.DO_JUMP:

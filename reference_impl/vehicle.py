@@ -18,8 +18,11 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from . import vehicle_info
+from .autopilot import Autopilot
 from .endpoint import MavlinkEndpoint
 from .flight import FlightBattery, FlightSim, Position
+from .flight_rules import FlightRules
 from .handover import control_messages as cm
 from .handover.authenticity import Roster, UnknownGcsGate
 from .handover.control_manager import ControlManager, ManagerConfig
@@ -38,12 +41,11 @@ from .mission.constants import Cmd as _Cmd
 from .mission.items import PLAN_TYPES, MissionItem, MissionType
 from .mission.server import MissionServer
 from .net.node import Address
+from .vehicle_class import VehicleClass, vehicle_class
+from .vehicle_info import Param
 from .wire.dialect import mavlink as _d
 from .wire.signing import SigningKey
 
-# HEARTBEAT.base_mode: custom_mode always carries the mode; AUTO is added while flying
-MODE_FLAGS_IDLE = _d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-MODE_FLAGS_FLYING = _d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | _d.MAV_MODE_FLAG_AUTO_ENABLED
 HEARTBEAT_PERIOD = 1.0
 POSITION_PERIOD = 1.0
 MAX_CONTROL_EVENTS = 1000   # kept for whoever reads them (the mission computer, later)
@@ -62,10 +64,18 @@ class VehicleConfig:
     require_signature: bool = False
     # HEARTBEAT.autopilot (MAV_AUTOPILOT): GCSs adapt to it (generic 7, ArduPilot 3, PX4 12)
     autopilot: int = _d.MAV_AUTOPILOT_GENERIC_MISSION_FULL
+    # HEARTBEAT.type (MAV_TYPE): what flies; vehicle_class.py says how (a ground vehicle never climbs)
+    vehicle_type: int = _d.MAV_TYPE_QUADROTOR
     # HEARTBEAT.custom_mode on the ground / while flying the mission, in the autopilot's own
-    # numbering (GCSs show it as the flight mode); 0 for the generic autopilot, which has none
+    # numbering (GCSs show it as the flight mode), for a vehicle without a mode table
+    # (flight_rules.modes); 0 for the generic autopilot, which has none
     custom_mode_idle: int = 0
     custom_mode_mission: int = 0
+    # How the autopilot lets itself be flown: modes, arming, starting, take-off, landing,
+    # return (flight_rules.py; the default: the spec vehicle, no modes and no arming)
+    flight_rules: FlightRules = FlightRules()
+    # The parameters PARAM_REQUEST_READ is answered for (PARAM_VALUE); others get no answer
+    params: tuple[Param, ...] = ()
     # the GCS link is bound to one peer address (real SITL links: VARIANTS.md L1, L2)
     single_peer_link: bool = False
     # Operator control. None (the default): no system manager, 32100 is UNSUPPORTED and any
@@ -87,6 +97,13 @@ class VehicleConfig:
     # drained by distance flown; the emergency procedure plans its refuge with it. None: none.
     battery: FlightBattery | None = None
 
+    def __post_init__(self) -> None:
+        if self.flight_rules.modes and (self.custom_mode_idle or self.custom_mode_mission):
+            raise ValueError("custom_mode_idle / custom_mode_mission are for a vehicle without a mode table; "
+                             "with flight modes the HEARTBEAT carries the current mode's number (boot_mode)")
+        if len({p.name for p in self.params}) != len(self.params):
+            raise ValueError("params: a parameter is listed twice")
+
 
 class VehicleNode:
     """Reference vehicle as a sans-IO datagram node."""
@@ -95,7 +112,8 @@ class VehicleNode:
                  wall_clock: Callable[[], float] = time.time,
                  server_class: type[MissionServer] = MissionServer,
                  manager_class: type[ControlManager] = ControlManager,
-                 mission_computer_class: type[MissionComputer] = MissionComputer) -> None:
+                 mission_computer_class: type[MissionComputer] = MissionComputer,
+                 autopilot_class: type[Autopilot] = Autopilot) -> None:
         self.config = cfg = config or VehicleConfig()
         keyring = cfg.roster.keyring(cfg.system, cfg.signing) if cfg.roster is not None else None
         self.endpoint = MavlinkEndpoint(cfg.system, cfg.component, version=cfg.mavlink_version,
@@ -105,9 +123,12 @@ class VehicleNode:
         self.server = server_class(cfg.system, cfg.component, cfg.behaviour)
         self.server.home = home_item(cfg.home)
         self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed,
-                                battery=cfg.battery)
+                                battery=cfg.battery, ground=vehicle_class(cfg.vehicle_type) is VehicleClass.GROUND)
         self.frames_received = 0
         self.events: list[str] = []   # human-readable log of plan changes, for the CLI
+        # autopilot_class: a test plugs in an autopilot that misbehaves (autopilot_faults.py)
+        self.autopilot = autopilot_class(cfg.flight_rules, self.flight, events=self.events,
+                                         legacy_modes=(cfg.custom_mode_idle, cfg.custom_mode_mission))
         self._seen = self._plan_state()
         self._seen_quick = (self.server.store.version, 0, 0)
         self._next_heartbeat: float | None = 0.0
@@ -154,6 +175,10 @@ class VehicleNode:
                     self.flight.retarget(now)
             elif name in ("COMMAND_LONG", "COMMAND_INT"):
                 self._on_command(msg, frame.source, now)
+            elif name == "PARAM_REQUEST_READ" and self._for_me(msg):
+                value = vehicle_info.param_value_message(self.config.params, msg)
+                if value is not None:
+                    self.endpoint.send(value, frame.source)
         self._note_changes()
         if self.mission_computer is not None:
             self._sync_mission_computer(now)
@@ -164,6 +189,7 @@ class VehicleNode:
         self._send(self.server.poll(now))
         self._note_changes()
         self._send(self.flight.poll(now))
+        self._send(self.autopilot.poll(now))
         if self.mission_computer is not None:
             self._sync_mission_computer(now)
             self._on_handover(self.mission_computer.poll(now), now)
@@ -178,7 +204,8 @@ class VehicleNode:
         best = self._next_heartbeat
         control = self.control.next_deadline() if self.control is not None else None
         mc = self.mission_computer.next_deadline() if self.mission_computer is not None else None
-        for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline(), control, mc):
+        for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline(),
+                  self.autopilot.next_deadline(), control, mc):
             if t is not None and (best is None or t < best):
                 best = t
         return best
@@ -302,31 +329,31 @@ class VehicleNode:
 
     def _plan_changed(self, now: float) -> None:
         """A new flight plan was committed (or cleared)."""
+        self._send(self.autopilot.plan_changed(now))
         if self.config.autostart and self.server.store.count(0):
-            self._send(self.flight.start(now))
+            self._send(self.autopilot.start_now(now))
         else:
             self.flight.retarget(now)
 
+    def _for_me(self, msg: Any) -> bool:
+        return msg.target_system in (0, self.config.system) and msg.target_component in (0, self.config.component)
+
     def _on_command(self, msg: Any, source: tuple[int, int], now: float) -> None:
-        if msg.target_system not in (0, self.config.system) or msg.target_component not in (0, self.config.component):
+        if not self._for_me(msg):
             return
         if msg.command == Cmd.DO_SET_MISSION_CURRENT and self.server.behaviour.set_current_command:
             self._send(self.server.command_set_current(msg.param1, source, now))
             self.flight.retarget(now)
-        elif msg.command == Cmd.MISSION_START:
-            started = self.flight.start(now)
-            result = CommandResult.ACCEPTED if started else CommandResult.FAILED
-            self.endpoint.send(m.command_ack_message(msg.command, result, source), source)
-            self._send(started)
-        else:
-            self.endpoint.send(m.command_ack_message(msg.command, CommandResult.UNSUPPORTED, source), source)
+            return
+        answer = self.autopilot.command(msg, source, now)   # modes, arming, start, take-off, RTL, land, home
+        if answer is None:
+            answer = [Send(m.command_ack_message(msg.command, CommandResult.UNSUPPORTED, source), source)]
+        self._send(answer)
 
     def _heartbeat(self) -> Any:
-        cfg, flying = self.config, self.flight.flying
-        return _d.MAVLink_heartbeat_message(
-            _d.MAV_TYPE_QUADROTOR, cfg.autopilot, MODE_FLAGS_FLYING if flying else MODE_FLAGS_IDLE,
-            cfg.custom_mode_mission if flying else cfg.custom_mode_idle,
-            _d.MAV_STATE_ACTIVE if flying else _d.MAV_STATE_STANDBY, 3)
+        base_mode, custom_mode, status = self.autopilot.heartbeat_fields()
+        return _d.MAVLink_heartbeat_message(self.config.vehicle_type, self.config.autopilot, base_mode, custom_mode,
+                                            status, 3)
 
     def _position(self, now: float) -> Any:
         p = self.flight.where(now)

@@ -48,8 +48,9 @@ def test_flight_reaches_every_item_in_order_and_reports_progress():
     elapsed = net.clock.now() - t0
     net.run_for(0.01)                    # the MISSION_CURRENT sent right after the last item
     assert reached(gcs) == [0, 1, 2, 3, 4]
-    # 300 m north and a 20 m climb and descent at 10 m/s, plus the 5 s hold at item 2
-    assert 35.0 < elapsed < 40.0, elapsed
+    # the take-off straight up (20 m at 2.5 m/s), 300 m north at 10 m/s, the 5 s hold at item 2,
+    # the DO item's 0.1 s, and the landing's 20 m descent at 2 m/s
+    assert elapsed == pytest.approx(20 / 2.5 + 300 / 10 + 5 + 0.1 + 20 / 2, abs=0.2)
     currents = [m for m in gcs.received if m.get_type() == "MISSION_CURRENT"]
     assert [c.seq for c in currents if c.mission_state == MissionState.ACTIVE][:1] == [0]
     assert {c.seq for c in currents} >= {0, 1, 2, 3, 4}

@@ -9,15 +9,15 @@ from . import mutant, server_mutant
 
 
 class _NoItemReached(MissionProgress):
-    def reached(self, seq, now):
-        return [s for s in super().reached(seq, now) if s.msg.get_type() != "MISSION_ITEM_REACHED"]
+    def reached(self, seq, now, **kw):
+        return [s for s in super().reached(seq, now, **kw) if s.msg.get_type() != "MISSION_ITEM_REACHED"]
 
 
 class _SilentCurrentInFlight(MissionProgress):
     """Announces the start and the end of the flight, nothing between (no stream either)."""
 
-    def reached(self, seq, now):
-        out = super().reached(seq, now)
+    def reached(self, seq, now, **kw):
+        out = super().reached(seq, now, **kw)
         return [s for s in out if s.msg.get_type() != "MISSION_CURRENT"] if self.running else out
 
     def poll(self, now):

@@ -104,7 +104,9 @@ class ServerBehaviour:
     home_at_seq0: bool = False
     # How items are kept: "exact" (as received), or "compact15": a 15-byte command record
     # (altitude in whole cm, hold time in whole seconds, other waypoint params dropped,
-    # rally altitude in whole metres, *_INT frames reported as their plain frames).
+    # rally altitude in whole metres, *_INT frames reported as their plain frames), or
+    # "compact15-plane": ArduPlane's build of it (a waypoint keeps acceptance radius and pass-by
+    # distance as whole metres up to 255 instead of its hold time).
     item_storage: str = "exact"
     # A downloaded mission item carries current=1 exactly when it is the current item
     # (False: the flag is 0 on every item, whatever is current).
@@ -123,6 +125,9 @@ class ServerBehaviour:
     set_current_only_idle: bool = False
     # MISSION_ITEM_REACHED is sent this many times for each item reached, 1 s apart.
     item_reached_repeats: int = 1
+    # MISSION_ITEM_REACHED waits in one slot until the next send opportunity (progress.py
+    # REACHED_SLOT_DELAY): an item reached meanwhile replaces it, so only the later is sent.
+    item_reached_one_slot: bool = False
 
     # --- framing and warnings -------------------------------------------------------------
     # Plan types whose transfers need MAVLink 2: a MAVLink 1 frame about them gets

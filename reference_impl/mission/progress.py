@@ -16,26 +16,40 @@ from .store import MissionStore
 
 MODE_UNKNOWN, MODE_MISSION, MODE_SUSPENDED = 0, 1, 2
 REACHED_REPEAT_PERIOD = 1.0   # s between repeats of MISSION_ITEM_REACHED (item_reached_repeats)
+# s a reached report waits in its slot (reached_one_slot): the next time the autopilot's link
+# sends it, about one of its loops later. An item done within it of the one before (a DO
+# command right after a waypoint, 0.1 s in the flight model) takes the slot over, and the
+# MISSION_CURRENT the flight owes goes out with it: both autopilots send the two from one
+# snapshot of mission progress (PX4 mavlink_mission.cpp check_active_mission; ArduPilot's
+# deferred MSG_CURRENT_WAYPOINT and MSG_MISSION_ITEM_REACHED), so an intermediate current
+# item is not announced either. The report goes first, so the last item's is out before the
+# MISSION_CURRENT that says the mission is complete (PX4 sends that one with its 1 Hz stream).
+REACHED_SLOT_DELAY = 0.25
 
 
 class MissionProgress:
     """`home_at_seq0`: item 0 is the vehicle's home, so the mission starts at 1 and
     MISSION_CURRENT.total is count - 1 (VARIANTS.md A1). `report_ids`: MISSION_CURRENT
     carries the plan ids (else zero: A19). `reached_repeats`: MISSION_ITEM_REACHED is sent
-    this many times, 1 s apart (P13)."""
+    this many times, 1 s apart (P13). `reached_one_slot`: the report is not sent at once but
+    kept in one slot until REACHED_SLOT_DELAY later, and a later item reached by then
+    replaces it (PX4 and ArduPilot keep one pending reached index per link)."""
 
     def __init__(self, store: MissionStore, period: float, *, home_at_seq0: bool = False,
-                 report_ids: bool = True, reached_repeats: int = 1) -> None:
+                 report_ids: bool = True, reached_repeats: int = 1, reached_one_slot: bool = False) -> None:
         self.store = store
         self.period = period
         self.home_at_seq0 = home_at_seq0
         self.report_ids = report_ids
         self.reached_repeats = reached_repeats
+        self.reached_one_slot = reached_one_slot
         self.seq = 0
         self.running = False
         self.complete = False
         self._next_stream: float | None = 0.0
         self._repeat: tuple[int, int, float] | None = None   # (seq, sends left, next at)
+        self._slot: tuple[int, float] | None = None            # (seq, send at): reached_one_slot
+        self._announce_due = False                              # a MISSION_CURRENT to send with the slot
 
     @property
     def first_seq(self) -> int:
@@ -71,33 +85,49 @@ class MissionProgress:
     def set_current(self, seq: int, now: float) -> list[Send]:
         self.seq = seq
         self.complete = False
+        self._announce_due = False
         return self.announce(now)
 
     def plan_replaced(self, now: float) -> list[Send]:
         """A new flight plan was committed (or cleared): start again from item 0."""
         self.seq, self.running, self.complete = self.first_seq, False, False
-        self._repeat = None
+        self._repeat = self._slot = None
+        self._announce_due = False
         return self.announce(now)
 
-    def reached(self, seq: int, now: float) -> list[Send]:
-        """The vehicle reached item `seq`: say so, then move on to the next item."""
-        out = [Send(m.item_reached_message(seq))]
-        if self.reached_repeats > 1:
-            self._repeat = (seq, self.reached_repeats - 1, now + REACHED_REPEAT_PERIOD)
-        if seq + 1 < self.store.count(MissionType.MISSION):
+    def reached(self, seq: int, now: float, *, ends: bool = False) -> list[Send]:
+        """The vehicle reached item `seq`: say so, then move on to the next item (`ends`: the
+        mission is over at this item, as after a landing, whatever follows it)."""
+        if seq + 1 < self.store.count(MissionType.MISSION) and not ends:
             self.seq = seq + 1
         else:
             self.running, self.complete = False, True
-        return out + self.announce(now)
+        if self.reached_one_slot:   # report and announcement wait for the slot's send
+            self._slot = (seq, self._slot[1] if self._slot is not None else now + REACHED_SLOT_DELAY)
+            self._announce_due = True
+            return []
+        return self._report(seq, now) + self.announce(now)
+
+    def _report(self, seq: int, now: float) -> list[Send]:
+        """MISSION_ITEM_REACHED for `seq` now, and its repeats from now on."""
+        if self.reached_repeats > 1:
+            self._repeat = (seq, self.reached_repeats - 1, now + REACHED_REPEAT_PERIOD)
+        return [Send(m.item_reached_message(seq))]
 
     def next_deadline(self) -> float | None:
-        if self._repeat is not None and (self._next_stream is None or self._repeat[2] < self._next_stream):
-            return self._repeat[2]
-        return self._next_stream
+        times = [self._next_stream, self._repeat[2] if self._repeat is not None else None,
+                 self._slot[1] if self._slot is not None else None]
+        return min((t for t in times if t is not None), default=None)
 
     def poll(self, now: float) -> list[Send]:
         out: list[Send] = []
-        if self._repeat is not None and now >= self._repeat[2]:
+        if self._slot is not None and now >= self._slot[1]:
+            seq, self._slot = self._slot[0], None
+            out += self._report(seq, now)
+            if self._announce_due:
+                self._announce_due = False
+                out += self.announce(now)
+        elif self._repeat is not None and now >= self._repeat[2]:
             seq, left, _ = self._repeat
             out.append(Send(m.item_reached_message(seq)))
             self._repeat = (seq, left - 1, now + REACHED_REPEAT_PERIOD) if left > 1 else None

@@ -102,7 +102,22 @@ def _compact15(item: MissionItem) -> MissionItem:
     return replace(item, frame=frame, z=z)
 
 
+def _compact15_plane(item: MissionItem) -> MissionItem:
+    """ArduPlane's build of the same record: a waypoint's 16-bit p1 holds its acceptance radius
+    (param2) in the low byte and its pass-by distance (param3) in the high byte, each a whole
+    number of metres, at most 255; the hold time (param1) and yaw (param4) are not kept
+    (ArduPilot libraries/AP_Mission/AP_Mission.cpp mavlink_int_to_mission_cmd and
+    mission_cmd_to_mavlink_int, the APM_BUILD_ArduPlane branches for MAV_CMD_NAV_WAYPOINT).
+    Everything else as `_compact15`."""
+    kept = _compact15(item)
+    if item.command != Cmd.NAV_WAYPOINT or item.mission_type is not MissionType.MISSION:
+        return kept
+    return replace(kept, param1=0.0, param2=_whole(item.param2, 0, 255), param3=_whole(item.param3, 0, 255),
+                   param4=0.0)
+
+
 STORAGE_FORMS: dict[str, Callable[[MissionItem], MissionItem]] = {
     "exact": lambda item: item,
     "compact15": _compact15,
+    "compact15-plane": _compact15_plane,
 }

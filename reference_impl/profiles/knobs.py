@@ -1,8 +1,9 @@
 """Every knob a profile file may set: its name, where it lands, how its value is read.
 
 A knob lands in `ServerBehaviour` (the mission engine), in its `Timings`, in
-`VehicleConfig` (the node around it), or in the item rules (RULES: each such knob is one
-argument of `validation.rules_for`, which builds `ServerBehaviour.item_rules` from them
+`VehicleConfig` (the node around it), in its `FlightRules` (FLIGHT: how the autopilot lets
+itself be flown; parsers in flight_knobs.py), or in the item rules (RULES: each such knob is
+one argument of `validation.rules_for`, which builds `ServerBehaviour.item_rules` from them
 all). Values come from TOML; each parser turns one into the engine's type or raises
 `ValueError` with what was expected, which the loader turns into a one-line `UsageError`
 naming the file and the key.
@@ -20,8 +21,9 @@ from ..mission.items import PLAN_TYPES, MissionType
 from ..mission.store import STORAGE_FORMS
 from ..mission.validation import CommandList
 from ..wire.dialect import mavlink as _d
+from . import flight_knobs as fk
 
-BEHAVIOUR, TIMINGS, CONFIG, RULES = "behaviour", "timings", "config", "rules"
+BEHAVIOUR, TIMINGS, CONFIG, RULES, FLIGHT = "behaviour", "timings", "config", "rules", "flight"
 _TYPE_BY_NAME = {t.label: t for t in PLAN_TYPES}
 _FRAME_BY_NAME = {e.name.removeprefix("MAV_FRAME_"): value for value, e in _d.enums["MAV_FRAME"].items()
                   if not e.name.endswith("_ENUM_END")}
@@ -30,7 +32,7 @@ _FRAME_BY_NAME = {e.name.removeprefix("MAV_FRAME_"): value for value, e in _d.en
 @dataclass(frozen=True)
 class Knob:
     name: str
-    where: str                       # BEHAVIOUR | TIMINGS | CONFIG
+    where: str                       # BEHAVIOUR | TIMINGS | CONFIG | RULES | FLIGHT
     field: str                       # the dataclass field it sets
     parse: Callable[[Any], Any]      # TOML value -> engine value (ValueError if bad)
     doc: str
@@ -178,6 +180,21 @@ def _nan_params(v: Any) -> dict[int, frozenset[int]]:
     return table
 
 
+_MAV_TYPE_BY_NAME = {e.name.removeprefix("MAV_TYPE_"): value for value, e in _d.enums["MAV_TYPE"].items()
+                     if not e.name.endswith("_ENUM_END")}
+
+
+def _mav_type(v: Any) -> int:
+    """vehicle_type = a MAV_TYPE by name (with or without MAV_TYPE_, e.g. "FIXED_WING") or number."""
+    if isinstance(v, str):
+        value = _MAV_TYPE_BY_NAME.get(v.upper().removeprefix("MAV_TYPE_"))
+        if value is None:
+            raise ValueError(f"{v!r} is no MAV_TYPE of the upstream common.xml (e.g. QUADROTOR, FIXED_WING, "
+                             "VTOL_FIXEDROTOR, GROUND_ROVER; or give its number)")
+        return value
+    return _count(0, 255)(v)
+
+
 def _metres(v: Any) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
         raise ValueError(f"expected a number of metres > 0, got {v!r}")
@@ -251,23 +268,82 @@ _KNOBS = (
     Knob("download_current_flag", BEHAVIOUR, "download_current_flag", _bool,
          "a downloaded mission item has current=1 exactly when it is the current item (false: never)"),
     Knob("home_at_seq0", BEHAVIOUR, "home_at_seq0", _bool, "mission item 0 is the vehicle's home"),
-    Knob("item_storage", BEHAVIOUR, "item_storage", _storage, "how items are kept: exact or compact15"),
+    Knob("item_storage", BEHAVIOUR, "item_storage", _storage,
+         "how items are kept: exact, compact15 (ArduPilot's 15-byte record) or compact15-plane "
+         "(ArduPlane's: a waypoint keeps its radius and pass-by distance, not its hold time)"),
     Knob("opaque_id_fields", BEHAVIOUR, "opaque_id_fields", _bool, "plan ids are reported (false: the older dialect)"),
     Knob("clear_all_supported", BEHAVIOUR, "clear_all_supported", _bool, "MISSION_CLEAR_ALL with MAV_MISSION_TYPE_ALL works"),
     Knob("clear_while_flying", BEHAVIOUR, "clear_while_flying", _bool, "the mission may be cleared while flown"),
     Knob("set_current_only_idle", BEHAVIOUR, "set_current_only_idle", _bool, "MISSION_SET_CURRENT is refused during a transfer"),
     Knob("item_reached_repeats", BEHAVIOUR, "item_reached_repeats", _count(1, 100),
          "MISSION_ITEM_REACHED is sent this many times, 1 s apart"),
+    Knob("item_reached_one_slot", BEHAVIOUR, "item_reached_one_slot", _bool,
+         "MISSION_ITEM_REACHED waits in one slot until the next send (0.25 s): an item reached meanwhile "
+         "(a DO command right after a waypoint) replaces it, so only the later one is reported"),
     Knob("mavlink2_types", BEHAVIOUR, "mavlink2_types", _types, "plan types whose transfers need MAVLink 2"),
     Knob("legacy_warnings", BEHAVIOUR, "legacy_warnings", _bool, "STATUSTEXT warning for MISSION_REQUEST / MISSION_ITEM"),
     # vehicle
     Knob("autopilot", CONFIG, "autopilot", _count(0, 255), "HEARTBEAT.autopilot (MAV_AUTOPILOT)"),
     Knob("custom_mode_idle", CONFIG, "custom_mode_idle", _count(0, 0xFFFFFFFF),
-         "HEARTBEAT.custom_mode when not flying the mission (the autopilot's own mode number)"),
+         "HEARTBEAT.custom_mode when not flying the mission (the autopilot's own mode number), "
+         "for a vehicle without modes"),
     Knob("custom_mode_mission", CONFIG, "custom_mode_mission", _count(0, 0xFFFFFFFF),
-         "HEARTBEAT.custom_mode while flying the mission (the autopilot's own mode number)"),
+         "HEARTBEAT.custom_mode while flying the mission (the autopilot's own mode number), "
+         "for a vehicle without modes"),
     Knob("single_peer_link", CONFIG, "single_peer_link", _bool,
          "the GCS link is bound to the first peer address: other senders are never read"),
+    # --- the vehicle model: what flies, and how the autopilot flies it (issue 23) ---
+    Knob("vehicle_type", CONFIG, "vehicle_type", _mav_type,
+         "HEARTBEAT.type (MAV_TYPE, by name or number); its class (vehicle_class.py) says how it flies: "
+         "a ground vehicle never climbs (default QUADROTOR)"),
+    Knob("cruise_speed", CONFIG, "speed", fk.speed, "m/s: the flight's ground speed between items (default 10)"),
+    Knob("params", CONFIG, "params", fk.params,
+         "the parameters PARAM_REQUEST_READ is answered for ({NAME = value} or {NAME = {value, type}}); "
+         "any other name gets no answer (default: none)"),
+    Knob("modes", FLIGHT, "modes", fk.modes,
+         "the flight modes ([{name, number, does}]: HEARTBEAT.custom_mode and what the vehicle does in "
+         "it: manual, mission, guided, hold, rtl, land, takeoff); default: none, DO_SET_MODE is UNSUPPORTED "
+         "and custom_mode_idle / custom_mode_mission say the HEARTBEAT's mode"),
+    Knob("set_mode_params", FLIGHT, "set_mode_params", fk.set_mode_params,
+         "how MAV_CMD_DO_SET_MODE names a mode: custom-mode (param2 is its number) or px4 (param2 main, "
+         "param3 sub mode: number = main << 16 | sub << 24)"),
+    Knob("boot_mode", FLIGHT, "boot_mode", fk.mode_name, "the mode the vehicle starts in (needed with modes)"),
+    Knob("mission_end_mode", FLIGHT, "mission_end_mode", fk.mode_or_stay,
+         "the mode the vehicle switches to when its mission ends in the air (\"stay\": its mission mode, holding)"),
+    Knob("command_refusal", FLIGHT, "refusal", fk.command_result,
+         "COMMAND_ACK result of a refused mode change, arming, disarming or start (default FAILED)"),
+    Knob("arming", FLIGHT, "arming", fk.flag,
+         "the vehicle flies only armed and takes MAV_CMD_COMPONENT_ARM_DISARM (false: UNSUPPORTED; it "
+         "counts as armed while it flies)"),
+    Knob("no_arming_modes", FLIGHT, "no_arming_modes", fk.mode_names, "modes in which arming is refused"),
+    Knob("landing_required", FLIGHT, "landing_required", fk.flag,
+         "a mission without a landing item cannot be flown: arming in the mission mode and MISSION_START "
+         "are refused, and storing one draws the plan-refused STATUSTEXT"),
+    Knob("land_start_blocks_arming", FLIGHT, "land_start_blocks_arming", fk.flag,
+         "a mission with DO_LAND_START refuses arming (arm-refused-plan)"),
+    Knob("mission_start", FLIGHT, "mission_start", fk.mission_start,
+         "what MAV_CMD_MISSION_START does: flies (at once), mission-mode (params 1-2 must be 0, else "
+         "DENIED; the mission mode, flown once armed) or mission-mode-and-arm (a valid plan and param1 "
+         "within it, else DENIED; the mission mode, and arms)"),
+    Knob("takeoff_first", FLIGHT, "takeoff_first", fk.flag,
+         "the mission mode, entered armed on the ground, needs a take-off as the next navigation item "
+         "(else refused, missing-takeoff STATUSTEXT)"),
+    Knob("takeoff_command", FLIGHT, "takeoff_command", fk.takeoff_command,
+         "what MAV_CMD_NAV_TAKEOFF does: unsupported, guided-climb (armed on the ground in a guided mode: "
+         "climbs to param7), takeoff-mode (switches to the takeoff mode) or refused"),
+    Knob("takeoff_altitude", FLIGHT, "takeoff_altitude", fk.metres,
+         "m above home a take-off mode or command climbs to when it names no altitude (default 10)"),
+    Knob("rtl_lands", FLIGHT, "rtl_lands", fk.flag,
+         "the return mode lands at home (false: it stays there, loitering; a ground vehicle stops)"),
+    Knob("disarm_after_landing", FLIGHT, "disarm_after_landing", fk.seconds_or_none,
+         "s after touching down the vehicle disarms by itself (\"none\": it stays armed)"),
+    Knob("disarm_idle_after", FLIGHT, "disarm_idle_after", fk.seconds_or_none,
+         "s armed on the ground without taking off before it disarms by itself (\"none\": never)"),
+    Knob("disarm_resets_mission", FLIGHT, "disarm_resets_mission", fk.disarm_resets_mission,
+         "a disarm makes the first item current again: never, always or outside-mission-mode"),
+    Knob("statustexts", FLIGHT, "texts", fk.texts,
+         "the autopilot's words for its refusals and news ({event = text}; events in flight_rules.py "
+         "TEXT_EVENTS; {mode} is the current mode's name); default: none"),
 )
 
 KNOBS: dict[str, Knob] = {k.name: k for k in _KNOBS}

@@ -1,4 +1,5 @@
-"""Reading profile files: the bundled `spec`, `px4`, `ardupilot`, or a user's own.
+"""Reading profile files: the bundled ones (BUILTIN_PROFILES: `spec`, `px4` and its fixed-wing
+and VTOL, `ardupilot` and its plane and rover), or a user's own.
 
     name = "my-fork"
     description = "our PX4 fork: retries capped again"
@@ -27,11 +28,12 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..errors import UsageError
+from ..flight_rules import FlightRules
 from ..mission.behaviour import ServerBehaviour
 from ..mission.timing import Timings
 from ..mission.validation import rules_for
 from ..vehicle import VehicleConfig
-from .knobs import BEHAVIOUR, CONFIG, KNOBS, RULES, TIMINGS
+from .knobs import BEHAVIOUR, CONFIG, FLIGHT, KNOBS, RULES, TIMINGS
 from .model import Alternative, Documented, KnobSetting, Profile
 
 if sys.version_info >= (3, 11):
@@ -40,7 +42,8 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 BUNDLED = Path(__file__).parent
-BUILTIN_PROFILES: tuple[str, ...] = ("spec", "px4", "ardupilot")
+BUILTIN_PROFILES: tuple[str, ...] = ("spec", "px4", "px4-fixedwing", "px4-vtol", "ardupilot", "ardupilot-plane",
+                                     "ardupilot-rover")
 MAX_BASE_DEPTH = 8
 _TOP_KEYS = {"name", "description", "base", "knob", "documented"}
 _KNOB_KEYS = {"knob", "value", "variant", "source", "why", "alternative", "seen_on"}
@@ -206,7 +209,7 @@ def spec_default(knob: str) -> Any:
 
 
 def _build(settings: tuple[KnobSetting, ...], path: Path) -> tuple[ServerBehaviour, VehicleConfig]:
-    fields: dict[str, dict[str, Any]] = {BEHAVIOUR: {}, TIMINGS: {}, CONFIG: {}, RULES: {}}
+    fields: dict[str, dict[str, Any]] = {BEHAVIOUR: {}, TIMINGS: {}, CONFIG: {}, RULES: {}, FLIGHT: {}}
     for s in settings:
         knob = KNOBS[s.knob]
         fields[knob.where][knob.field] = knob.parse(s.value)
@@ -216,7 +219,8 @@ def _build(settings: tuple[KnobSetting, ...], path: Path) -> tuple[ServerBehavio
     try:
         timings = Timings(**fields[TIMINGS])
         behaviour = ServerBehaviour(timings=timings, **fields[BEHAVIOUR])
+        flight = FlightRules(**fields[FLIGHT])
+        config = dataclasses.replace(VehicleConfig(), behaviour=behaviour, flight_rules=flight, **fields[CONFIG])
     except ValueError as exc:   # knobs that do not fit together, e.g. uncapped retries, no timeout
         raise UsageError(f"{path}: {exc}") from None
-    config = dataclasses.replace(VehicleConfig(), behaviour=behaviour, **fields[CONFIG])
     return behaviour, config

@@ -51,14 +51,17 @@ def test_heartbeat_carries_the_profiles_autopilot_and_mode(name: str) -> None:
     net.run_for(2.0)
     beat = _beats(gcs)[-1]
     assert (beat.autopilot, beat.custom_mode) == (autopilot, flying)
-    assert beat.base_mode == d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | d.MAV_MODE_FLAG_AUTO_ENABLED
+    # flying, every vehicle says it is armed (the spec vehicle needs no arming, but says so too)
+    assert beat.base_mode == (d.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | d.MAV_MODE_FLAG_AUTO_ENABLED
+                              | d.MAV_MODE_FLAG_SAFETY_ARMED)
     assert beat.system_status == d.MAV_STATE_ACTIVE
 
 
 def test_px4_modes_are_auto_loiter_and_auto_mission() -> None:
-    px4 = load_profile("px4").config
-    assert (px4.custom_mode_idle, px4.custom_mode_mission) == (0x03040000, 0x04040000)
-    for knob in ("custom_mode_idle", "custom_mode_mission"):
-        setting = load_profile("px4").setting(knob)
-        assert setting.variant == "HB" and "px4_custom_mode.h" in setting.source
-        assert "mode.h" in load_profile("ardupilot").setting(knob).source
+    rules = load_profile("px4").config.flight_rules
+    assert rules.mode_named(rules.boot_mode).number == 0x03040000
+    assert rules.mode_named("AUTO.MISSION").number == 0x04040000
+    for profile in ("px4", "ardupilot"):
+        modes, boot = load_profile(profile).setting("modes"), load_profile(profile).setting("boot_mode")
+        assert ("px4_custom_mode.h" if profile == "px4" else "mode.h") in modes.source and "mode.h" in boot.source
+        assert boot.variant == "HB"

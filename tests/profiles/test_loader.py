@@ -69,7 +69,8 @@ def test_a_base_cycle_is_reported_not_followed_forever(tmp_path) -> None:
 
 
 def test_an_unknown_name_lists_the_builtins() -> None:
-    with pytest.raises(UsageError, match="builtin: spec, px4, ardupilot"):
+    with pytest.raises(UsageError, match="builtin: spec, px4, px4-fixedwing, px4-vtol, ardupilot, ardupilot-plane, "
+                                         "ardupilot-rover"):
         load_profile("betaflight")
 
 
