@@ -47,6 +47,7 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
     for r in run.results:
         counts[r.outcome.value] += 1
     failing = sum(1 for flag in gating_flags.values() if flag)
+    left_armed = sum(1 for f in run.flights if f["disarmed"] is False)
     identity = None if run.identity is None else dict(run.identity)
     address = identity.pop("address", None) if identity is not None else None
     measured_identity = _measured_identity(identity)
@@ -68,10 +69,12 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
         },
         "identity": identity,
         "summary": {"total": len(run.results), **counts, "gating_failures": failing,
-                    "verdict": verdict(failing, interrupted=run.interrupted)},
+                    **({"left_armed": left_armed} if run.flights else {}),
+                    "verdict": verdict(failing, interrupted=run.interrupted, left_armed=left_armed)},
         "gating": gating,
         "restore": run.restore,
         "capture": capture,
+        **({"flights": [dict(f) for f in run.flights]} if run.flights else {}),
         "clauses": clauses,
         "volatile": {"started": started.strftime("%Y-%m-%dT%H:%M:%SZ"),
                      "duration_s": round(run.duration_s, 3),

@@ -10,6 +10,11 @@
     seen_on = "PX4 v1.16.0 SITL (SIH), 2026-11-23"
 
 `--expect NAME` reads conformance/expectations/NAME.toml; `--expect PATH` reads a file.
+An entry may hold for some kinds of vehicle only (`vehicles = ["fixed-wing", "vtol"]`, the
+classes of reference_impl/vehicle_class.py): one autopilot stores or flies differently per
+vehicle type, so a clause may be listed once per class, never twice for one. Which entries
+apply is known once the target's HEARTBEAT says its MAV_TYPE (`Expectations.identify`);
+until then, only the entries for every vehicle.
 A clause listed here that fails is a known deviation, but only the failure it names:
 `observed` is the verdict's detail with its numbers, ids and quoted values as `*`
 (fnmatch), so a different failure of the same clause still fails the run. An entry
@@ -23,10 +28,13 @@ from __future__ import annotations
 import fnmatch
 import re
 import sys
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from mavconform.reference_impl.errors import UsageError
+
+from mavconform.reference_impl.vehicle_class import VehicleClass, vehicle_class
 
 from .catalogue import BY_ID
 
@@ -58,6 +66,10 @@ class Deviation:
     observed: str = ""        # fnmatch pattern of the failure it excuses ("": any failure)
     evidence: str = ""        # the failure it was made from, as the run reported it
     seen_on: str = ""         # the target (autopilot and version) it was seen on
+    vehicles: tuple[str, ...] = ()   # the vehicle classes it holds for (empty: every one)
+
+    def holds_for(self, vehicle: str | None) -> bool:
+        return not self.vehicles or vehicle in self.vehicles
 
     def describe(self) -> str:
         return f"{self.variant}: {self.reason}" if self.variant else self.reason
@@ -78,7 +90,38 @@ def resolve(name_or_path: str) -> Path:
     return path
 
 
-def load(name_or_path: str) -> dict[str, Deviation]:
+class Expectations(Mapping[str, Deviation]):
+    """An expectations file's deviations by clause, for the vehicle the run is against: the
+    entries for every vehicle, and once `identify` has the target's HEARTBEAT, those for its
+    class too."""
+
+    def __init__(self, entries: list[Deviation] = (), source: str = "") -> None:
+        self.entries = list(entries)
+        self.source = source
+        self.vehicle: str | None = None
+        self._active = self._select()
+
+    def identify(self, identity: dict | None) -> None:
+        self.vehicle = vehicle_class((identity or {}).get("type")).value if identity else None
+        self._active = self._select()
+
+    def _select(self) -> dict[str, Deviation]:
+        return {d.clause: d for d in self.entries if d.holds_for(self.vehicle)}
+
+    def __getitem__(self, clause: str) -> Deviation:
+        return self._active[clause]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._active)
+
+    def __len__(self) -> int:
+        return len(self._active)
+
+
+VEHICLES = tuple(c.value for c in VehicleClass if c is not VehicleClass.OTHER)
+
+
+def load(name_or_path: str) -> Expectations:
     path = resolve(name_or_path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -92,7 +135,7 @@ def load(name_or_path: str) -> dict[str, Deviation]:
     unknown = set(data) - {"deviation", "description"}
     if unknown:
         raise UsageError(f"{path}: unknown key {sorted(unknown)[0]!r} (expected [[deviation]] tables)")
-    out: dict[str, Deviation] = {}
+    out: list[Deviation] = []
     for i, entry in enumerate(entries):
         where = f"{path}: deviation[{i}]"
         if not isinstance(entry, dict):
@@ -106,16 +149,27 @@ def load(name_or_path: str) -> dict[str, Deviation]:
             raise UsageError(f"{where}: unknown clause {clause!r} (see `mavconform clauses`)")
         if not isinstance(reason, str) or not reason.strip():
             raise UsageError(f"{where}: 'reason' must be a non-empty string")
-        extra = set(entry) - {"clause", "reason", "variant", "observed", "evidence", "seen_on"}
+        extra = set(entry) - {"clause", "reason", "variant", "observed", "evidence", "seen_on", "vehicles"}
         if extra:
             raise UsageError(f"{where}: unknown key {sorted(extra)[0]!r}")
-        if clause in out:
-            raise UsageError(f"{where}: {clause} is listed twice")
+        vehicles = _vehicles(entry.get("vehicles", []), where)
+        for earlier in out:
+            if earlier.clause == clause and (not vehicles or not earlier.vehicles
+                                             or set(vehicles) & set(earlier.vehicles)):
+                both = sorted(set(vehicles) & set(earlier.vehicles)) or ["every vehicle"]
+                raise UsageError(f"{where}: {clause} is listed twice for {', '.join(both)}")
         texts = {}
         for key in ("variant", "observed", "evidence", "seen_on"):
             value = entry.get(key, "")
             if not isinstance(value, str):
                 raise UsageError(f"{where}: {key!r} must be a string")
             texts[key] = value.strip()
-        out[clause] = Deviation(clause, reason.strip(), **texts)
-    return out
+        out.append(Deviation(clause, reason.strip(), **texts, vehicles=vehicles))
+    return Expectations(out, str(path))
+
+
+def _vehicles(value: object, where: str) -> tuple[str, ...]:
+    if not isinstance(value, list) or not all(isinstance(v, str) and v in VEHICLES for v in value):
+        raise UsageError(f"{where}: 'vehicles' must be a list of vehicle classes from "
+                         f"{', '.join(VEHICLES)}, got {value!r}")
+    return tuple(value)

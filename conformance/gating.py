@@ -81,9 +81,12 @@ def gate(results: list[ClauseResult], *, strict: bool,
     return flags, {"mode": "baseline", "regressions": regressions, "fixed": fixed}
 
 
-def verdict(gating_failures: int, *, interrupted: bool) -> str:
+def verdict(gating_failures: int, *, interrupted: bool, left_armed: int = 0) -> str:
     """The run's verdict: an interrupted run neither passes nor fails, whatever it decided
-    before it stopped (it is not evidence that the rest would pass)."""
+    before it stopped (it is not evidence that the rest would pass), unless it left the
+    vehicle armed: that fails any run (harness/landing.py)."""
+    if left_armed:
+        return FAIL
     if interrupted:
         return INTERRUPTED
     return FAIL if gating_failures else PASS

@@ -13,7 +13,8 @@ value, its alternative, or the row's `example`, which gives a knob no builtin pr
 a run too):
 
 (a) alone: the spec vehicle (builtin:spec as the suite runs it) with just that knob, and the
-    knobs the row `needs` at the same profile's values, gives exactly the row's verdicts:
+    knobs the row `needs` and those of its `side` the profile sets (at the profile's values),
+    gives exactly the row's verdicts:
     each listed clause its listed outcome, every other clause the verdict it has on the spec
     vehicle. A row without clauses claims that the knob changes no verdict at all.
 (b) needed: the profile's vehicle with the knob put back to the spec default (and any knob
@@ -47,6 +48,12 @@ class Judged:
     why: str
     needs: tuple[str, ...] = ()
     example: Any = None
+    side: tuple[str, ...] = ()       # tried with those of these knobs the profile sets too
+
+    @property
+    def together(self) -> tuple[str, ...]:
+        """Every knob that goes with this one: what it needs and its side."""
+        return self.needs + tuple(k for k in self.side if k not in self.needs)
 
 
 def fails(*clauses: str, why: str, needs: tuple[str, ...] = (), example: Any = None) -> Judged:
@@ -59,6 +66,20 @@ def not_applicable(*clauses: str, why: str, example: Any = None) -> Judged:
 
 def unjudged(why: str, example: Any = None) -> Judged:
     return Judged({}, why, (), example)
+
+
+# The autopilot side of a vehicle, one unit: the HEARTBEAT's autopilot picks the suite's flight
+# style (harness/flight_styles.py), which only flies a vehicle whose modes, arming and start
+# are that autopilot's; so each of these is tried together with every other one the profile sets.
+FLYING = ("autopilot", "vehicle_type", "params", "modes", "set_mode_params", "boot_mode", "mission_end_mode",
+          "command_refusal", "arming", "no_arming_modes", "landing_required", "land_start_blocks_arming",
+          "mission_start", "takeoff_first", "takeoff_command", "takeoff_altitude", "rtl_lands",
+          "disarm_after_landing", "disarm_idle_after", "disarm_resets_mission", "statustexts", "cruise_speed")
+
+
+def flown(why: str) -> Judged:
+    """A knob of the autopilot side (FLYING): no clause judges it, with the rest of its side."""
+    return Judged({}, why, (), None, FLYING)
 
 
 JUDGES: dict[str, Judged] = {
@@ -177,8 +198,44 @@ JUDGES: dict[str, Judged] = {
         "MIS.CUR.06", why="MIS.CUR.06 counts MISSION_CURRENTs (about 1 Hz)", example=3.0),
     "item_reached_repeats": unjudged(
         "MISSION_ITEM_REACHED repeated still says the item was reached (MIS.PRG.01)"),
+    "item_reached_one_slot": fails(
+        "MIS.PRG.01", why="the flight's plan has a waypoint with a DO_CHANGE_SPEED right after it: the "
+                          "DO command's report takes the waypoint's pending one over"),
+    "item_reached_unreported": unjudged(
+        "a DO command needs no report of its own (MIS.PRG.01 asks for the navigation items'); "
+        "without one, the waypoint before it keeps its pending report"),
+    # --- flying: the autopilot side (reference_impl/flight_rules.py) ------------------------
+    # How a vehicle is flown is the autopilot's own: the suite's flight style follows the
+    # HEARTBEAT (harness/flight_styles.py), so these change no verdict on the vehicles that
+    # have them; they judge the suite's flight, which tests/conformance/test_flight_*.py do.
+    "vehicle_type": flown(
+        "HEARTBEAT identity: the flight is laid out and flown for the vehicle's class; no clause "
+        "judges the type"),
+    "cruise_speed": flown("how fast the flight model flies: the flight's window allows for the slowest "
+                             "of its class"),
+    "params": flown("the radii the flight reads to size its legs; no clause judges them"),
+    "modes": flown("the autopilot's own flight modes: the flight asks for its style's and confirms it "
+                      "from the HEARTBEAT"),
+    "set_mode_params": flown("how MAV_CMD_DO_SET_MODE names a mode (ArduPilot's or PX4's numbers)"),
+    "boot_mode": flown("HEARTBEAT identity: the mode the autopilot starts in"),
+    "mission_end_mode": flown("where the vehicle goes after its last item: the flight then lands it"),
+    "command_refusal": flown("the MAV_RESULT a refused flight command gets"),
+    "arming": flown("a mission flies armed: the flight arms it in its style's mode, and disarms it after"),
+    "no_arming_modes": flown("modes the vehicle will not arm in: the flight arms in its style's mode"),
+    "landing_required": flown("the plan the flight flies ends with a landing"),
+    "land_start_blocks_arming": flown("the plan the flight flies has no DO_LAND_START"),
+    "mission_start": flown("how MAV_CMD_MISSION_START starts a mission: the flight starts it as the "
+                              "style says"),
+    "takeoff_first": flown("the flight's plan starts with its take-off item"),
+    "takeoff_command": flown("the flight takes off with the plan's take-off item, not the command"),
+    "takeoff_altitude": flown("the flight's plan says its take-off altitude"),
+    "rtl_lands": flown("the flight lands a vehicle by its LAND mode or its plan's landing, not by RTL"),
+    "disarm_after_landing": flown("the flight disarms a landed vehicle that did not disarm itself"),
+    "disarm_idle_after": flown("the flight arms only to fly at once"),
+    "disarm_resets_mission": flown("the flight sets its first item current before every start"),
+    "statustexts": flown("a STATUSTEXT informs the operator; no clause asks for or reads it"),
     # --- the node ---------------------------------------------------------------------------
-    "autopilot": unjudged(
+    "autopilot": flown(
         "HEARTBEAT identity: a GCS adapts to it; an in-process vehicle's stored form comes from "
         "its knobs"),
     "custom_mode_idle": unjudged("HEARTBEAT identity: the autopilot's own mode number, which the "
@@ -203,7 +260,7 @@ def dependents(knob: str, knobs: set[str] | frozenset[str]) -> set[str]:
     while todo:
         k = todo.pop()
         for other in knobs:
-            if other not in out and k in JUDGES[other].needs:
+            if other not in out and k in JUDGES[other].together:
                 out.add(other)
                 todo.append(other)
     return out

@@ -140,7 +140,7 @@ def mavlink_session(request: pytest.FixtureRequest):
     _STATE["results"] = results
     try:
         try:
-            session.discover()
+            p.expected.identify(session.discover())
         except TargetUnresponsive as exc:
             _STATE["dead"] = f"target unresponsive: {exc}"
             from .outcome import ClauseResult, Outcome
@@ -182,7 +182,8 @@ def _write(p, session, results, restore, started, capture) -> None:
                      sum(t.forced_wait for t in session.testers()),
                      interrupted=interrupted_by is not None,
                      interrupted_at=(not_run[0] if not_run else "restore") if interrupted_by else None,
-                     interrupted_by=interrupted_by, receive_queue=session.receive_facts())
+                     interrupted_by=interrupted_by, receive_queue=session.receive_facts(),
+                     flights=list(session.flights))
     gating.apply_expectations(run.results, p.expected)
     flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)
     doc = document.build(p.options, run, started=started, gating_flags=flags, gating=summary,

@@ -57,6 +57,8 @@ class RunOutcome:
     snapshot: dict[str, int] = field(default_factory=dict)
     # our sockets' receive queues (Session.receive_facts): datagrams dropped, buffer granted
     receive_queue: dict[str, int | None] | None = None
+    # how each flight ended (Session.flights): a vehicle left armed fails the run
+    flights: list[dict] = field(default_factory=list)
 
 
 @dataclass
@@ -244,7 +246,7 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
                       unresponsive=dead, discovery_s=discovered, interrupted=interrupted,
                       interrupted_at=phase if interrupted else None,
                       interrupted_by=how if interrupted else None,
-                      receive_queue=session.receive_facts())
+                      receive_queue=session.receive_facts(), flights=list(session.flights))
 
 
 def interrupted_before_start(clauses: Iterable[Clause], how: str | None,

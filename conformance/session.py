@@ -27,7 +27,7 @@ from mavconform.reference_impl.net.uri import local_bind_for
 from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.tester import Tester, record_traffic
-from .harness.stored_form import form_for_autopilot, form_of_behaviour
+from .harness.stored_form import form_for_target, form_of_behaviour
 from .harness.tester_node import TesterNode
 from .outcome import TargetUnresponsive
 from .target_uri import TargetUri
@@ -78,6 +78,11 @@ class Session:
         self.allow_flight = uri.in_process if allow_flight is None else allow_flight
         self.cache: dict[str, Any] = {}        # observations several clauses share
         self.current_clause = ""
+        # how every flight ended (harness.landing): the clause that flew, the style, the plan,
+        # disarmed or not; the run report shows them, and one left armed fails the run
+        self.flights: list[dict[str, Any]] = []
+        # told the target's identity once its HEARTBEAT came (the expectations for its vehicle type)
+        self.on_identity: Callable[[dict[str, Any]], None] | None = None
         self.identity: dict[str, Any] | None = None
         self.vehicle: VehicleNode | None = None
         self.guard: GuardedNode | None = None   # an in-process vehicle that raises stops here
@@ -158,12 +163,18 @@ class Session:
         self.t.target = node.target
         msg = frame.msg
         self.t.form = (form_of_behaviour(self.vehicle.config.behaviour, f"builtin:{self.uri.name}")
-                       if self.vehicle is not None else form_for_autopilot(msg.autopilot))
+                       if self.vehicle is not None else form_for_target(msg.autopilot, msg.type))
         self.identity = {
             "system": frame.src_system, "component": frame.src_component, "type": msg.type,
             "autopilot": msg.autopilot, "mavlink_version": frame.version,
             "address": _label(self.target_address), "stored_form": self.t.form.describe()}
+        if self.on_identity is not None:
+            self.on_identity(self.identity)
         return self.identity
+
+    def record_flight(self, style: str, plan: str, ending: Any) -> None:
+        """Keep how a flight ended (a `landing.Ending`) for the run report."""
+        self.flights.append({"clause": self.current_clause, "style": style, "plan": plan, **ending.as_dict()})
 
     def second(self) -> Tester:
         """A second GCS (another system id; on the first one's link or a socket of its own,

@@ -35,7 +35,7 @@ class Prepared:
     options: document.RunOptions
     uri: TargetUri
     clauses: list[Clause]
-    expected: dict[str, expectations.Deviation]
+    expected: expectations.Expectations
     baseline: dict[str, str] | None
     report_dir: Path | None
 
@@ -55,10 +55,10 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
 
 
 def checked_outputs(options: document.RunOptions, report_dir: str | Path | None
-                    ) -> tuple[dict[str, expectations.Deviation], dict[str, str] | None, Path | None]:
+                    ) -> tuple[expectations.Expectations, dict[str, str] | None, Path | None]:
     """The expectations, the baseline's outcomes and the report folder (made), each checked:
     what judges and keeps a run, whichever side of the protocol it tests."""
-    expected = expectations.load(options.expectations) if options.expectations else {}
+    expected = expectations.load(options.expectations) if options.expectations else expectations.Expectations()
     baseline = None
     if options.baseline:
         from mavconform.reports.run_document import load_run
@@ -92,6 +92,7 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
         try:
             with Session(p.uri, scale=p.options.time_scale, virtual=virtual, seed=p.options.seed,
                          allow_flight=allow_flight, capture=capture) as session:
+                session.on_identity = p.expected.identify
                 run = run_clauses(session, p.clauses, on_result=on_result, restore=restore, guard=guard)
                 if session.guard is not None and session.guard.crash:
                     run.restore = {**run.restore, "detail": run.restore["detail"]
@@ -104,7 +105,7 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
                        stop_signals=stop_signals, capture=True)
 
 
-def guarded_run(options: document.RunOptions, expected: dict[str, expectations.Deviation],
+def guarded_run(options: document.RunOptions, expected: expectations.Expectations,
                 baseline: dict[str, str] | None, report_dir: Path | None,
                 clauses: Callable[[InterruptGuard, CaptureHook | None, OnResult | None], RunOutcome], *,
                 on_result: OnResult | None, stop_signals: tuple[int, ...], capture: bool,
@@ -136,10 +137,10 @@ def guarded_run(options: document.RunOptions, expected: dict[str, expectations.D
     return doc, run
 
 
-def _judged_live(on_result: OnResult | None, expected: dict[str, expectations.Deviation]) -> OnResult | None:
+def _judged_live(on_result: OnResult | None, expected: expectations.Expectations) -> OnResult | None:
     """`on_result` with each result judged against the expectations as it comes, so the live
     line already says KNOWN (or "deviation no longer observed"), as the reports will."""
-    if not expected:
+    if not expected.entries:
         return on_result
 
     def judged(clause: Clause, result: ClauseResult) -> None:

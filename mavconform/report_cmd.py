@@ -71,7 +71,8 @@ def draft_expectations(args: argparse.Namespace) -> int:
     from mavconform.reports import load_run
     from mavconform.reports.run_document import clause_detail, run_facts
     doc = load_run(args.run_json)
-    base = expectations.load(args.base) if args.base else {}
+    base = expectations.load(args.base) if args.base else expectations.Expectations()
+    base.identify(doc["identity"])   # the base's entries for the run's vehicle type
     seen_on = args.seen_on.strip() or f"{doc['run']['target']}, {run_facts(doc)['started'][:10]}"
     out = [f"description = {json.dumps(f'Clauses {seen_on} fails, drafted from {Path(args.run_json).name}')}"]
     for clause in doc["clauses"]:
@@ -83,7 +84,8 @@ def draft_expectations(args: argparse.Namespace) -> int:
             detail = detail.split("): ", 1)[-1]
         entry = {"clause": clause["id"], "variant": known.variant if known else "",
                  "reason": known.reason if known else UNCONFIRMED,
-                 "observed": expectations.observed_pattern(detail), "evidence": detail, "seen_on": seen_on}
+                 "observed": expectations.observed_pattern(detail), "evidence": detail, "seen_on": seen_on,
+                 "vehicles": list(known.vehicles) if known else []}
         out.append("[[deviation]]\n" + "\n".join(f"{k} = {json.dumps(v)}" for k, v in entry.items() if v))
     text = "\n\n".join(out) + "\n"
     if not args.output:

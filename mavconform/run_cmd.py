@@ -169,7 +169,7 @@ def _printer():
 
 def _summary(doc: dict[str, Any], report_dir: str) -> None:
     from mavconform.reports.run_document import run_facts
-    from mavconform.reports.text import dropped_text
+    from mavconform.reports.text import dropped_text, flight_endings, safety_alarm
     s = doc["summary"]
     ident, timing = doc["identity"], run_facts(doc)
     where = f" at {timing['address']}" if timing["address"] else ""
@@ -188,5 +188,10 @@ def _summary(doc: dict[str, Any], report_dir: str) -> None:
     dropped = dropped_text(doc)
     if dropped is not None:
         print(f"our receive queues: {dropped}")
+    for line in flight_endings(doc):
+        print(f"flight: {line}")
+    alarm = safety_alarm(doc)
+    if alarm is not None:
+        print(f"\n!!! {alarm}\n", flush=True)
     print(f"verdict: {s['verdict'].upper()} ({s['gating_failures']} clause(s) fail the run); "
           f"reports in {report_dir}/")

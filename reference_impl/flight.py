@@ -244,7 +244,7 @@ class FlightSim:
             if self._path is not None:
                 self._move_to(self._path.last)
             landed = item.command in LAND_COMMANDS and not self.ground
-            out += self.progress.reached(item.seq, arrived, ends=landed)
+            out += self.progress.reached(item.seq, arrived, ends=landed, command=item.command)
             if landed:                        # touched down: the mission is over
                 self.landed_at = arrived
                 self._arrive_at = self._path = None

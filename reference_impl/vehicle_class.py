@@ -39,7 +39,7 @@ _VTOL = frozenset({
 _GROUND = frozenset({_d.MAV_TYPE_GROUND_ROVER, _d.MAV_TYPE_SURFACE_BOAT, _d.MAV_TYPE_GROUND_QUADRUPED})
 
 
-def vehicle_class(mav_type: int) -> VehicleClass:
+def vehicle_class(mav_type: int | None) -> VehicleClass:
     """The class of a HEARTBEAT.type (MAV_TYPE); OTHER for everything that is no vehicle the
     mission flight knows (airships, balloons, rockets, submarines, kites, gimbals, GCSs, ...)."""
     if mav_type in _MULTICOPTER:
@@ -51,3 +51,9 @@ def vehicle_class(mav_type: int) -> VehicleClass:
     if mav_type in _GROUND:
         return VehicleClass.GROUND
     return VehicleClass.OTHER
+
+
+def type_name(mav_type: int | None) -> str:
+    """MAV_TYPE_X's X for a report, or the number as given."""
+    entry = _d.enums.get("MAV_TYPE", {}).get(mav_type) if mav_type is not None else None
+    return entry.name.removeprefix("MAV_TYPE_") if entry is not None else str(mav_type)

@@ -23,7 +23,8 @@ from mavconform.reports import run_document as rd
 from mavconform.reports.deciding import deciding_event, recorded_event
 from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
-from mavconform.reports.text import (clean, dropped_text, identity_text, interruption, one_line,
+from mavconform.reports.text import (clean, dropped_text, flight_endings, identity_text, interruption, one_line,
+                                     safety_alarm,
                                      seconds, value_text, verdict_headline)
 
 OUTCOME_COLOURS = {"pass": "#1a7f37", "fail": "#cf222e", "known-deviation": "#9a6700",
@@ -39,6 +40,8 @@ h1 { margin-bottom: .2em; } h2 { border-bottom: 1px solid #d0d7de; padding-botto
 .verdict.interrupted { color: #9a6700; }
 p.interrupted { background: #fff8c5; border: 1px solid #d4a72c; border-radius: 4px;
                 padding: .5em 1em; font-weight: 600; }
+p.safety { background: #ffebe9; border: 2px solid #cf222e; border-radius: 4px;
+           padding: .5em 1em; font-weight: 700; color: #82071e; }
 p.tally { color: #57606a; margin-top: 0; }
 table { border-collapse: collapse; margin: .5em 0; }
 th, td { border: 1px solid #d0d7de; padding: .25em .6em; text-align: left; vertical-align: top; }
@@ -101,6 +104,9 @@ def html_report(doc: dict[str, Any], *, folder: str | Path | None = None) -> str
            f'<p class="verdict {escape(verdict)}">{headline} '
            f'<small>({summary["gating_failures"]} gating failure'
            f'{"" if summary["gating_failures"] == 1 else "s"})</small></p>']
+    alarm = safety_alarm(doc)
+    if alarm is not None:
+        out.append(f'<p class="safety">⚠️ {escape(alarm)}</p>')
     stopped = interruption(doc)
     if stopped is not None:
         out.append(f'<p class="interrupted">{escape(stopped)}</p>')
@@ -211,6 +217,8 @@ def _fact_rows(doc: dict[str, Any]) -> list[tuple[str, str]]:
         facts.append(("forced waits", seconds(volatile["forced_wait_s"])))
     if dropped_text(doc) is not None:
         facts.append(("our receive queues", dropped_text(doc)))
+    for line in flight_endings(doc):
+        facts.append(("flight", line))
     keys = [k for k in _RUN_LABELS if k in run] + sorted(
         k for k in run if k not in _RUN_LABELS and k not in _SHOWN_APART)
     for key in keys:

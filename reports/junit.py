@@ -32,7 +32,7 @@ from mavconform.reports.run_document import (
     ERROR, FAIL, KNOWN_DEVIATION, PASS, clause_detail, clause_duration, clause_events, receive_queue,
     run_facts,
 )
-from mavconform.reports.text import clean, exchange_lines, interruption, one_line, value_text
+from mavconform.reports.text import clean, exchange_lines, interruption, one_line, safety_alarm, value_text
 
 SUITE_NAME = "mavconform"
 MESSAGE_LIMIT = 500  # characters in a message attribute (CI tools show it as a headline)
@@ -44,8 +44,8 @@ def junit_xml(doc: dict[str, Any]) -> str:
     timing = run_facts(doc)
     suite = ET.Element("testsuite", {
         "name": SUITE_NAME,
-        "tests": str(len(clauses)),
-        "failures": str(sum(_element(doc, c)[0] == "failure" for c in clauses)),
+        "tests": str(len(clauses) + (safety_alarm(doc) is not None)),
+        "failures": str(sum(_element(doc, c)[0] == "failure" for c in clauses) + (safety_alarm(doc) is not None)),
         "errors": str(sum(_element(doc, c)[0] == "error" for c in clauses)),
         "skipped": str(sum(_element(doc, c)[0] == "skipped" for c in clauses)),
         "time": f"{timing['duration_s'] or 0.0:.3f}",
@@ -57,6 +57,11 @@ def junit_xml(doc: dict[str, Any]) -> str:
         ET.SubElement(properties, "property", {"name": clean(name), "value": one_line(value)})
     for clause in clauses:
         _testcase(suite, doc, clause)
+    alarm = safety_alarm(doc)
+    if alarm is not None:   # a CI view must show it red, whatever the clauses say
+        case = ET.SubElement(suite, "testcase", {"classname": f"{SUITE_NAME}.safety",
+                                                 "name": "the vehicle is disarmed after every flight", "time": "0.000"})
+        ET.SubElement(case, "failure", {"message": alarm, "type": "left-armed"}).text = alarm + "\n"
     stopped = interruption(doc)
     if stopped is not None:   # the counts alone would read as a clean run with skips
         ET.SubElement(suite, "system-err").text = stopped + "\n"

@@ -14,7 +14,8 @@ from urllib.parse import quote
 
 from mavconform.reports.run_document import (OUTCOMES, PASS, clause_detail, outcome_counts,
                                              run_facts)
-from mavconform.reports.text import (document_identity, dropped_text, interruption, one_line,
+from mavconform.reports.text import (document_identity, dropped_text, flight_endings, interruption, one_line,
+                                     safety_alarm,
                                      seconds, verdict_headline)
 
 DETAIL_LIMIT = 200  # characters of detail per table cell
@@ -44,6 +45,9 @@ def markdown_summary(doc: dict[str, Any]) -> str:
            f"gating mode {md(doc['gating']['mode'])}: {summary['gating_failures']} gating "
            f"failure{'' if summary['gating_failures'] == 1 else 's'}.",
            ""]
+    alarm = safety_alarm(doc)
+    if alarm is not None:
+        out += [f"> **⚠️ {md(alarm)}**", ""]
     stopped = interruption(doc)
     if stopped is not None:
         out += [f"> **{md(stopped)}**", ""]
@@ -55,6 +59,8 @@ def markdown_summary(doc: dict[str, Any]) -> str:
     dropped = dropped_text(doc)
     if dropped is not None:
         out += ["", f"Our sockets' receive queues: {md(dropped)}."]
+    for line in flight_endings(doc):
+        out += ["", f"Flight: {md(line)}."]
     if doc["capture"] is not None:
         out += ["", f"Capture: [{md(doc['capture'])}]({quote(one_line(doc['capture']))}) "
                    "(MCAP, opens in Foxglove)."]

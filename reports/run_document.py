@@ -21,10 +21,15 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
     run       {target, ...scalars: seed, time_scale, strict, ...,
                [interrupted: bool, interrupted_at: clause id or phase, interrupted_by: SIGTERM]}
     identity  {system, component, [type, autopilot, mavlink_version, ...]} or null
-    summary   {total, <one count per outcome>, gating_failures, verdict: pass|fail|interrupted}
+    summary   {total, <one count per outcome>, gating_failures, [left_armed],
+               verdict: pass|fail|interrupted}
     gating    {mode: strict|default|baseline, regressions: [id], fixed: [id]}
     restore   {status: restored|unchanged|failed|skipped, detail}
     capture   file name of the MCAP capture, or null
+    [flights  [{clause, style, plan, disarmed: true|false|null, detail}]]   how each flight the
+              run made ended (harness/landing.py): disarmed and confirmed by a HEARTBEAT (true),
+              possibly still armed (false: summary.left_armed counts them, and any fails the
+              run), or not known (null: its HEARTBEAT never shows arming)
     clauses   [{id, group, level, role, title, source, requirement, outcome, gating,
                 detail, expectation, exchange: [{dir: tx|rx|note, peer, msg, fields}],
                 [decided_by: index in exchange of the event the check judged last, or null]}]
@@ -321,6 +326,7 @@ class _Checker:
                                                   f"clauses[{first_index[clause_id]}]")
             first_index[clause_id] = index
         self.summary(self.key(doc, "summary", "", "object"), clauses)
+        self.flights(doc)
         if not self.old:
             self.volatile(self.key(doc, "volatile", "", "object"), clauses)
         if doc["run"].get("interrupted") and doc["summary"]["verdict"] == PASS:
@@ -470,6 +476,24 @@ class _Checker:
         self.value(values, path, ("object",))
         for name, text in values.items():
             self.value(text, f"{path}.{name}", ("string",))
+
+    def flights(self, doc: dict) -> None:
+        """How the run's flights ended; one left armed is counted and cannot pass."""
+        if "flights" not in doc:
+            if "left_armed" in doc["summary"]:
+                self.fail("summary.left_armed", "counted, but there is no flights section")
+            return
+        left = 0
+        for index, flight in enumerate(self.key(doc, "flights", "", "array")):
+            where = f"flights[{index}]"
+            self.value(flight, where, ("object",))
+            for key in ("clause", "style", "plan", "detail"):
+                self.key(flight, key, where, "string")
+            left += self.key(flight, "disarmed", where, "bool", "null") is False
+        if (stated := self.count(doc["summary"], "left_armed", "summary")) != left:
+            self.fail("summary.left_armed", f"{stated}, but {left} flights ended not disarmed")
+        if left and doc["summary"]["verdict"] == PASS:
+            self.fail("summary.verdict", "'pass', but a flight left the vehicle armed")
 
     def summary(self, summary: dict, clauses: list[dict]) -> None:
         if (total := self.count(summary, "total", "summary")) != len(clauses):

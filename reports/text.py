@@ -133,6 +133,26 @@ def dropped_text(doc: dict[str, Any]) -> str | None:
     return said + (f" (receive buffer {granted // 1024} KiB)" if granted is not None else "")
 
 
+def flight_endings(doc: dict[str, Any]) -> list[str]:
+    """One line per flight the run made: which clause flew it, as what, and how it ended."""
+    out = []
+    for flight in doc.get("flights", []):
+        state = {True: "disarmed", False: "MAY STILL BE ARMED", None: "arming state unknown"}[flight["disarmed"]]
+        out.append(one_line(f"{flight['clause'] or 'a flight'} ({flight['style']}): {state}: {flight['detail']}"))
+    return out
+
+
+def safety_alarm(doc: dict[str, Any]) -> str | None:
+    """What the reports say first when a flight did not end with the vehicle disarmed
+    (None: every flight did, or none was made)."""
+    left = [f for f in doc.get("flights", []) if f["disarmed"] is False]
+    if not left:
+        return None
+    where = ", ".join(f"{f['clause'] or 'a flight'} ({f['style']})" for f in left)
+    return one_line(f"THE VEHICLE MAY STILL BE ARMED: the suite could not confirm it disarmed after the flight of "
+                    f"{where}: {left[-1]['detail']}. Make it safe by hand before anyone goes near it.")
+
+
 def seconds(value: float) -> str:
     """A duration for people: "0.310 s", "12.5 s"."""
     return f"{value:.3f} s" if value < 10 else f"{value:.1f} s"

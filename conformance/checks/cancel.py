@@ -31,6 +31,7 @@ CANCELLED = MissionResult.OPERATION_CANCELLED
 # How long requests must stay away after a cancel: the spec's default timeout, so a vehicle
 # that ignored the cancel has resent its request even with a 1 s item timeout (ArduPilot's).
 AFTER_CANCEL_WINDOW = 1.5
+LET_GO_WAIT = 12.0        # s a vehicle that ignores the cancel may take to give the upload up (ArduPilot: 8 s)
 
 
 def _partial_upload(t: Tester, items: list[MissionItem], answered: int) -> None:
@@ -111,8 +112,14 @@ def _observe_cancelled_upload(t: Tester, window: float) -> CancelledUpload:
     t.send(m.ack_message(CANCELLED, MISSION, t.target))
     seen = t.collect(request(mission_type=MT), window)
     late = [(dt, f.msg.seq) for dt, f in seen]
-    if late:   # make sure it is over before reading the plan back
-        t.send(m.ack_message(CANCELLED, MISSION, t.target))
+    if late:   # make sure it is over before reading the plan back: wait (bounded) until it gives the
+        # upload up or stops asking, and only then, if it is still at it, cancel again; anything
+        # sent sooner would race its own give-up, which may come as the window closes
+        opened = t.now()
+        rest = t.collect(request(mission_type=MT) | ack(mission_type=MT), LET_GO_WAIT,
+                         stop=ack(mission_type=MT), quiet=window)
+        if not rest or (rest[-1][1].msg._type != "MISSION_ACK" and t.now() - opened >= LET_GO_WAIT * t.scale):
+            t.send(m.ack_message(CANCELLED, MISSION, t.target))
     return CancelledUpload(old, late, procedures.stored(t, MISSION), window,
                            seen[0][1] if seen else None)
 

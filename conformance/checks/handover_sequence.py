@@ -54,7 +54,7 @@ from __future__ import annotations
 import bisect
 import math
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Iterator
 
 from mavconform.reference_impl.errors import UsageError
@@ -66,10 +66,15 @@ from mavconform.reference_impl.handover.scenario import Scenario
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import Cmd, CommandResult, MissionResult, MissionState
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.vehicle_class import VehicleClass
 from mavconform.reference_impl.wire.dialect import mavlink as _d
 from mavconform.reference_impl.wire.frame import Frame
 
 from ..harness import flight as flying
+from ..harness.flight_plan import landing_item, takeoff_item
+from ..harness.flight_styles import FlightStyle
+from ..harness.landing import land_and_disarm
+from ..harness.vehicle_watch import VehicleWatch
 from ..harness import procedures
 from ..harness.match import msg
 from ..harness.measured import Measured
@@ -315,16 +320,23 @@ class _Flight:
     last_seq: int
 
 
-def _mission(route: Route, here: GeoPoint, hold_s: float) -> list[MissionItem]:
-    """From where the vehicle is straight to the hold point, held there (NAV_WAYPOINT param1,
-    the hold time), and straight back, at the path's altitude there; with a waypoint where
-    that leg has just entered the region, so however a flight model spends a hold (at the
-    waypoint, or as a slower leg to it: our FlightSim) it is spent inside the region."""
+def _mission(route: Route, here: GeoPoint, hold_s: float, vehicle: VehicleClass) -> list[MissionItem]:
+    """Take off where the vehicle is, fly straight to the hold point, hold there (NAV_WAYPOINT
+    param1, the hold time), fly straight back and land, at the path's altitude there; with a
+    waypoint where that leg has just entered the region, so however a flight model spends a
+    hold (at the waypoint, or as a slower leg to it: our FlightSim) it is spent inside the
+    region. The take-off and landing are the vehicle class's (harness.flight_plan): an
+    autopilot may refuse a mission without them (ArduCopter armed on the ground: a take-off
+    first; PX4 fixed-wing and VTOL: a landing)."""
     entry = _entry(route, here)
-    points = [(here, 0.0), *([(entry, 0.0)] if entry is not None else []), (route.hold, hold_s), (here, 0.0)]
-    return [MissionItem(seq, FRAME_GLOBAL_RELATIVE_ALT, int(Cmd.NAV_WAYPOINT), param1=hold,
-                        x=round(float(p.lat) * 1e7), y=round(float(p.lon) * 1e7), z=route.alt, mission_type=MISSION)
-            for seq, (p, hold) in enumerate(points)]
+    points = [*([(entry, 0.0)] if entry is not None else []), (route.hold, hold_s), (here, 0.0)]
+    x, y = round(float(here.lat) * 1e7), round(float(here.lon) * 1e7)
+    body = [takeoff_item(vehicle, x, y, route.alt)]
+    body += [MissionItem(0, FRAME_GLOBAL_RELATIVE_ALT, int(Cmd.NAV_WAYPOINT), param1=hold,
+                         x=round(float(p.lat) * 1e7), y=round(float(p.lon) * 1e7), z=route.alt, mission_type=MISSION)
+             for p, hold in points]
+    body.append(landing_item(vehicle, x, y))
+    return [replace(item, seq=seq) for seq, item in enumerate(body)]
 
 
 def _entry(route: Route, here: GeoPoint) -> GeoPoint | None:
@@ -381,20 +393,23 @@ def _flight(s: Session, route: Route, hold_s: float) -> Iterator[_Flight]:
         raise PreconditionFailed(f"setup: GCS {route.parent}'s request for control got {_result(frame)} "
                                  "(HO.CTL.02 judges that)")
     flight = None
+    style = watch = None   # set once the vehicle may be started: from then on it is landed and disarmed
     try:
         here = _here(a)
         _check_start(route, here)
-        items = _mission(route, here, hold_s)
+        vehicle_style = flying.style_of(s.identity)
+        items = _mission(route, here, hold_s, vehicle_style.vehicle)
         accepted = procedures.ensure_plan(a, items, MISSION)
         procedures.await_plan_taken(a, accepted)
-        a.note(f"the flight: straight to the hold point {route.where(route.hold)} the handover region of "
-               f"{route.pair}, held {hold_s:g} s, and back")
+        a.note(f"the flight: take off, straight to the hold point {route.where(route.hold)} the handover region "
+               f"of {route.pair}, held {hold_s:g} s, back and land")
         started = a.now()
-        flying.start(a, (s.identity or {}).get("autopilot"))
+        style, watch = vehicle_style, VehicleWatch(a, since=started)
+        flying.start(a, watch, style)
         flight = _Flight(route, a, b, here, hold_s, started, len(items) - 1)
         yield flight
     finally:
-        _land(s, route, a, b, flight, before)
+        _land(s, route, a, b, flight, before, (style, watch))
 
 
 def _flight_wait(flight: _Flight) -> float:
@@ -419,7 +434,8 @@ def _ended(flight: _Flight) -> Callable[[], bool]:
     return check
 
 
-def _land(s: Session, route: Route, a: Tester, b: Tester, flight: _Flight | None, before: list[MissionItem]) -> None:
+def _land(s: Session, route: Route, a: Tester, b: Tester, flight: _Flight | None, before: list[MissionItem],
+          started: tuple[FlightStyle | None, VehicleWatch | None]) -> None:
     keep = a.decided_by
     if flight is not None:
         a.note("afterwards: the flight is waited out")
@@ -428,8 +444,11 @@ def _land(s: Session, route: Route, a: Tester, b: Tester, flight: _Flight | None
     last = _latest_status(a)
     owner = last.msg.gcs_main if last is not None else 0
     holder = {route.parent: a, route.partner: b}.get(owner, a)
-    if flight is not None:
-        flying.end(holder)
+    style, watch = started
+    if style is not None and watch is not None:   # whether the flight flew or its start failed
+        if holder is not a:
+            watch = VehicleWatch(holder, since=watch.since)
+        s.record_flight(style.name, "the handover flight", land_and_disarm(holder, watch, style, None))
     holder.note(f"afterwards: GCS {_id(holder)} puts back the mission plan it found, and every GCS releases control")
     reply = procedures.upload(holder, before, MISSION) if before else procedures.clear(holder, MISSION)
     if reply is None or reply.msg.type != MissionResult.ACCEPTED:

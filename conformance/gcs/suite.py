@@ -38,7 +38,7 @@ class PreparedGcs:
     options: document.RunOptions
     adapter: GcsAdapter
     clauses: list[Clause]
-    expected: dict[str, expectations.Deviation]
+    expected: expectations.Expectations
     baseline: dict[str, str] | None
     report_dir: Path | None
     timeout_s: float

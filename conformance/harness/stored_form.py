@@ -8,7 +8,8 @@ therefore never decide an unrelated clause:
   neither has the altitude reference of its frame: PX4 keeps its own); `autocontinue` is a
   flight-sequence flag that fence and rally items do not have (PX4's fence record has no
   such field); a downloaded item's `current` flag is the vehicle's progress marker;
-- the target's storage: ArduPilot keeps home in mission slot 0 (A1: an uploaded item 0 is
+- the target's storage, chosen by autopilot *and* vehicle type (ArduPlane packs a
+  waypoint's params unlike ArduCopter and ArduRover): ArduPilot keeps home in mission slot 0 (A1: an uploaded item 0 is
   not kept, `AP_Mission::replace_cmd(0)` returns without writing, and a read of index 0
   returns home) and stores items in a compact record that rounds or drops some params (A13).
 MIS.UP.04 owns A1 and compares item 0 too (`strict()`); everywhere else a plan is compared
@@ -22,11 +23,11 @@ from typing import Any, Sequence
 
 from mavconform.reference_impl.mission.items import GLOBAL_FRAMES, PLAIN_FRAME, MissionItem, MissionType
 from mavconform.reference_impl.mission.store import STORAGE_FORMS
+from mavconform.reference_impl.vehicle_class import VehicleClass, type_name, vehicle_class
 
 MAX_LISTED = 8          # differences listed in one verdict; the rest are counted
 _FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z",
            "autocontinue", "mission_type")
-_AUTOPILOT_PROFILE = {3: "ardupilot", 12: "px4"}   # HEARTBEAT.autopilot -> builtin profile
 # upstream common.xml: the params of each plan-type command marked "Reserved" (1-4; 7 is z)
 RESERVED_PARAMS = {
     5001: (3, 4, 7),        # MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
@@ -124,20 +125,37 @@ def form_of_behaviour(behaviour: Any, basis: str) -> StoredForm:
     return StoredForm(behaviour.home_at_seq0, behaviour.item_storage, basis)
 
 
-def profile_for_autopilot(autopilot: int | None) -> str | None:
-    """The builtin profile of the autopilot family a HEARTBEAT names (None: the spec)."""
-    return _AUTOPILOT_PROFILE.get(autopilot) if autopilot is not None else None
+def profile_for_target(autopilot: int | None, mav_type: int | None = None) -> str | None:
+    """The builtin profile that models what a HEARTBEAT names (None: the spec): the one of
+    that autopilot for that class of vehicle (a VTOL without one of its own: the fixed-wing
+    one, whose stored form it shares), else the autopilot's first profile. The profiles'
+    own `autopilot` and `vehicle_type` knobs say what each models: one place."""
+    if autopilot is None:
+        return None
+    from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
+    wanted = vehicle_class(mav_type)
+    ours = [(name, vehicle_class(_vehicle_type(load_profile(name).config)))
+            for name in BUILTIN_PROFILES if load_profile(name).config.autopilot == autopilot]
+    for cls in (wanted, VehicleClass.FIXED_WING if wanted is VehicleClass.VTOL else None):
+        for name, modelled in ours:
+            if modelled is cls:
+                return name
+    return ours[0][0] if ours else None
 
 
-def form_for_autopilot(autopilot: int | None) -> StoredForm:
-    """The stored form of an external target, from its HEARTBEAT autopilot: the builtin
-    profile of that family holds the facts (one place), the spec otherwise."""
-    name = profile_for_autopilot(autopilot)
+def form_for_target(autopilot: int | None, mav_type: int | None = None) -> StoredForm:
+    """The stored form of an external target, from its HEARTBEAT: the builtin profile for
+    that autopilot and vehicle class holds the facts (one place), the spec otherwise."""
+    name = profile_for_target(autopilot, mav_type)
     if name is None:
         return SPEC_FORM
     from mavconform.reference_impl.profiles import load_profile
     return form_of_behaviour(load_profile(name).behaviour,
-                             f"HEARTBEAT autopilot {autopilot}: the {name} profile")
+                             f"HEARTBEAT autopilot {autopilot}, {type_name(mav_type)}: the {name} profile")
+
+
+def _vehicle_type(config: Any) -> int:
+    return getattr(config, "vehicle_type", 2)   # MAV_TYPE_QUADROTOR, the reference vehicle's
 
 
 def describe_differences(diffs: list[str]) -> str:

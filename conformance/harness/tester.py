@@ -98,6 +98,11 @@ class Tester:
         self.node.send(msg)
         self.driver.run_until(_always, timeout=0.0)   # flush it now, and take in what is waiting
 
+    def since_mark(self) -> list[Frame]:
+        """Every frame received since the floor, consumed or not (e.g. the STATUSTEXTs that
+        give a refusal's reason)."""
+        return [frame for _, frame in self.node.inbox[self._floor:]]
+
     def note(self, text: str) -> int | None:
         """A note in the exchange; its index there (None if no exchange kept it)."""
         if self.exchange is None:

@@ -40,7 +40,7 @@ from typing import Any
 
 from mavconform.conformance.harness import plans
 from mavconform.conformance.harness.stored_form import (SPEC_FORM, StoredForm, describe_differences,
-                                             form_for_autopilot, form_of_behaviour)
+                                             form_for_target, form_of_behaviour)
 from mavconform.conformance.session import build_vehicle
 from mavconform.conformance.target_uri import TargetUri
 from mavconform.fuzz.case import Violation
@@ -257,7 +257,8 @@ class Rig:
             self.form = form_of_behaviour(load_profile(self.profile).behaviour,
                                           f"profile {self.profile} (--profile)")
         else:
-            self.form = form_for_autopilot(getattr(self.gcs.target_heartbeat, "autopilot", None))
+            heartbeat = self.gcs.target_heartbeat
+            self.form = form_for_target(getattr(heartbeat, "autopilot", None), getattr(heartbeat, "type", None))
         admission = Admission(self.key, self.key is not None, self._ctx.wall_clock)
         self.builder = Builder(self._target, self._ctx, admission, sign_frames=self.key is not None)
         station.admission = admission        # from now on every datagram to the target is fed to it

@@ -46,6 +46,7 @@ class Watch:
         self.target: tuple[int, int] | None = None
         self.address: Address | None = None
         self.autopilot: int | None = None
+        self.mav_type: int | None = None
         self.last_heartbeat: float | None = None   # driver clock time of the target's last one
         self.last_reply: float | None = None       # ... and of its last answer to a GCS (REPLIES)
         self.last_status: tuple[float, Any] | None = None   # ... and its last CONTROL_STATUS
@@ -65,6 +66,7 @@ class Watch:
             ids = (frame.src_system, frame.src_component)
             if self.target is None:
                 self.target, self.address, self.autopilot = ids, source, msg.autopilot
+                self.mav_type = msg.type
                 self._next_beat = None
             if ids == self.target:
                 self.last_heartbeat = now
@@ -124,6 +126,10 @@ class TargetConnection:
     @property
     def autopilot(self) -> int | None:
         return self.watch.autopilot
+
+    @property
+    def mav_type(self) -> int | None:
+        return self.watch.mav_type
 
     def heartbeat_age(self) -> float:
         """Seconds since the target's last HEARTBEAT (driver clock)."""

@@ -37,7 +37,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
-from mavconform.conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, profile_for_autopilot
+from mavconform.conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, profile_for_target
 from mavconform.conformance.session import build_vehicle
 from mavconform.conformance.target_uri import TargetUri, parse_target
 from mavconform.reference_impl.errors import UsageError
@@ -86,19 +86,19 @@ def profile_from(name_or_file: str, basis: str) -> Profile:
 
 
 def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | None = None,
-                autopilot: int | None = None) -> Profile:
+                autopilot: int | None = None, mav_type: int | None = None) -> Profile:
     """In-process targets are held to their own profile's rules (a mutant claims to be the
     spec vehicle); a UDP target to the profile given with --profile, else to the builtin
-    profile of the autopilot family its HEARTBEAT names, else to the spec."""
+    profile of the autopilot and vehicle type its HEARTBEAT names, else to the spec."""
     if uri.kind == "mutant":
         return Profile()
     if vehicle is not None:
         return rules_of(vehicle.server.behaviour, f"the {uri} profile")
     if chosen is not None:
         return profile_from(chosen, f"profile {chosen} (--profile)")
-    name = profile_for_autopilot(autopilot)
+    name = profile_for_target(autopilot, mav_type)
     if name is not None:
-        return profile_from(name, f"the {name} profile (HEARTBEAT autopilot {autopilot})")
+        return profile_from(name, f"the {name} profile (HEARTBEAT autopilot {autopilot}, MAV_TYPE {mav_type})")
     return Profile()
 
 
@@ -125,7 +125,8 @@ class World:
         else:
             self._open_udp(capture, connection, seed)
         autopilot = self.connection.autopilot if self.connection is not None else None
-        base = profile_for(self.uri, self.vehicle, chosen=profile, autopilot=autopilot)
+        mav_type = self.connection.mav_type if self.connection is not None else None
+        base = profile_for(self.uri, self.vehicle, chosen=profile, autopilot=autopilot, mav_type=mav_type)
         self.profile = base if atomic is None else dataclasses.replace(base, atomic=atomic)
 
     # --- time and running -----------------------------------------------------------------

@@ -128,6 +128,10 @@ class ServerBehaviour:
     # MISSION_ITEM_REACHED waits in one slot until the next send opportunity (progress.py
     # REACHED_SLOT_DELAY): an item reached meanwhile replaces it, so only the later is sent.
     item_reached_one_slot: bool = False
+    # Commands whose completion sends no MISSION_ITEM_REACHED at all (ArduPilot verifies its
+    # camera, servo and relay DO commands itself, never through the vehicle's callback that
+    # reports); a report pending in the slot stays.
+    item_reached_unreported: frozenset[int] = frozenset()
 
     # --- framing and warnings -------------------------------------------------------------
     # Plan types whose transfers need MAVLink 2: a MAVLink 1 frame about them gets

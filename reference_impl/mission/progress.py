@@ -36,13 +36,15 @@ class MissionProgress:
     replaces it (PX4 and ArduPilot keep one pending reached index per link)."""
 
     def __init__(self, store: MissionStore, period: float, *, home_at_seq0: bool = False,
-                 report_ids: bool = True, reached_repeats: int = 1, reached_one_slot: bool = False) -> None:
+                 report_ids: bool = True, reached_repeats: int = 1, reached_one_slot: bool = False,
+                 unreported: frozenset[int] = frozenset()) -> None:
         self.store = store
         self.period = period
         self.home_at_seq0 = home_at_seq0
         self.report_ids = report_ids
         self.reached_repeats = reached_repeats
         self.reached_one_slot = reached_one_slot
+        self.unreported = unreported
         self.seq = 0
         self.running = False
         self.complete = False
@@ -95,13 +97,19 @@ class MissionProgress:
         self._announce_due = False
         return self.announce(now)
 
-    def reached(self, seq: int, now: float, *, ends: bool = False) -> list[Send]:
-        """The vehicle reached item `seq`: say so, then move on to the next item (`ends`: the
-        mission is over at this item, as after a landing, whatever follows it)."""
+    def reached(self, seq: int, now: float, *, ends: bool = False, command: int | None = None) -> list[Send]:
+        """The vehicle reached item `seq` (its `command`): say so, then move on to the next
+        item (`ends`: the mission is over at this item, as after a landing, whatever follows
+        it). A command in `unreported` moves on without a report."""
         if seq + 1 < self.store.count(MissionType.MISSION) and not ends:
             self.seq = seq + 1
         else:
             self.running, self.complete = False, True
+        if command in self.unreported:
+            if self.reached_one_slot and self._slot is not None:
+                self._announce_due = True
+                return []
+            return self.announce(now)
         if self.reached_one_slot:   # report and announcement wait for the slot's send
             self._slot = (seq, self._slot[1] if self._slot is not None else now + REACHED_SLOT_DELAY)
             self._announce_due = True

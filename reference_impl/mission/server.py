@@ -96,7 +96,8 @@ class MissionServer:
         self.progress = MissionProgress(self.store, b.current_period, home_at_seq0=b.home_at_seq0,
                                         report_ids=b.opaque_id_fields,
                                         reached_repeats=b.item_reached_repeats,
-                                        reached_one_slot=b.item_reached_one_slot)
+                                        reached_one_slot=b.item_reached_one_slot,
+                                        unreported=b.item_reached_unreported)
         self.home = DEFAULT_HOME     # the vehicle sets its own (home_at_seq0 serves it)
         self._keep = STORAGE_FORMS[b.item_storage]
         self._frame_version = 2

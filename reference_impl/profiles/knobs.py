@@ -140,6 +140,11 @@ def _frames(v: Any) -> frozenset[int]:
     return frozenset(_values(v, "MAV_FRAME names or numbers", _frame_value))
 
 
+def _command_set(v: Any) -> frozenset[int]:
+    """[MAV_CMD names or numbers]."""
+    return frozenset(_values(v, "MAV_CMD names or numbers", _command_value))
+
+
 def _mission_commands(v: Any) -> frozenset[int] | tuple[CommandList, ...]:
     """mission_commands = [names or numbers]: the mission commands the vehicle stores, in any
     frame; or [{frames = [...], commands = [...]}, ...]: one list per set of frames (a
@@ -280,6 +285,9 @@ _KNOBS = (
     Knob("item_reached_one_slot", BEHAVIOUR, "item_reached_one_slot", _bool,
          "MISSION_ITEM_REACHED waits in one slot until the next send (0.25 s): an item reached meanwhile "
          "(a DO command right after a waypoint) replaces it, so only the later one is reported"),
+    Knob("item_reached_unreported", BEHAVIOUR, "item_reached_unreported", _command_set,
+         "commands (MAV_CMD names or numbers) whose completion sends no MISSION_ITEM_REACHED "
+         "(a pending one in the slot stays)"),
     Knob("mavlink2_types", BEHAVIOUR, "mavlink2_types", _types, "plan types whose transfers need MAVLink 2"),
     Knob("legacy_warnings", BEHAVIOUR, "legacy_warnings", _bool, "STATUSTEXT warning for MISSION_REQUEST / MISSION_ITEM"),
     # vehicle

@@ -204,7 +204,7 @@ def spec_default(knob: str) -> Any:
     k = KNOBS[knob]
     if k.where == RULES:
         return inspect.signature(rules_for).parameters[k.field].default
-    owner = {BEHAVIOUR: ServerBehaviour, TIMINGS: Timings, CONFIG: VehicleConfig}[k.where]
+    owner = {BEHAVIOUR: ServerBehaviour, TIMINGS: Timings, CONFIG: VehicleConfig, FLIGHT: FlightRules}[k.where]
     return getattr(owner(), k.field)
 
 

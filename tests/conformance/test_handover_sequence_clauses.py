@@ -107,12 +107,15 @@ def test_the_mission_clauses_never_start_a_handover_on_builtin_spec() -> None:
     with _session("builtin:spec") as s:
         results = _run(s, catalogue.select("MIS.*"))
         vehicle = s.vehicle
+        flown = s.cache["mission_flight"][0].plan.items   # the progress clauses' one flight
     assert _not_passed(results) == {}
     assert vehicle.mission_computer.results == [] and not vehicle.handover_events
     assert any(moved[2] is McState.ON_MISSION for moved in vehicle.mission_computer.recent)   # PRG flew
     route = route_of(conformance_scenario())
-    for north in (25.0, 50.0, 75.0):   # the progress flight's waypoints, north of home
-        point = GeoPoint(HOME.lat + north / 111_320.0, HOME.lon)
+    placed = [it for it in flown if it.frame in (0, 3, 5, 6)]
+    assert len(placed) >= 5
+    for item in placed:   # its take-off, waypoints, loiter and landing: in A's disc, out of the region
+        point = GeoPoint.from_e7(item.x, item.y)
         assert route.parent_coverage.contains(point) and not route.inside(point)
 
 
@@ -133,7 +136,7 @@ def test_a_system_manager_without_a_mission_computer_is_not_applicable_after_one
         results = _run(s)
     assert {r.outcome for r in results.values()} == {Outcome.NOT_APPLICABLE}
     assert all("no mission computer" in r.detail for r in results.values())
-    flights = [e for e in vehicle.events if e.startswith("mission: 4 items stored")]   # the flight's plan
+    flights = [e for e in vehicle.events if e.startswith("mission: 5 items stored")]   # the flight's plan
     assert len(flights) == 1 and vehicle.owner == 0 and not vehicle.flight.flying
 
 

@@ -97,6 +97,7 @@ def test_every_row_says_what_judges_it_or_why_nothing_does(knob: str) -> None:
     assert set(row.clauses) <= CLAUSE_IDS, sorted(set(row.clauses) - CLAUSE_IDS)
     assert all(o in (Outcome.FAIL, Outcome.NOT_APPLICABLE) for o in row.clauses.values()), row.clauses
     assert all(n in JUDGES and n != knob for n in row.needs), row.needs
+    assert all(n in JUDGES for n in row.side), row.side
     if row.example is not None:
         KNOBS[knob].parse(row.example)
         assert not _is_default(knob, row.example), f"{knob}: the example is the spec default"
@@ -130,7 +131,7 @@ def test_alone_a_knob_changes_exactly_its_rows_verdicts(name: str, knob: str, wh
     profile = PROFILES[name]
     setting = profile.setting(knob)
     value = setting.value if which == "value" else setting.alternative.value
-    needs = [(n, profile.setting(n).value) for n in JUDGES[knob].needs]
+    needs = [(n, profile.setting(n).value) for n in JUDGES[knob].together if profile.setting(n) is not None]
     _alone(knob, value, needs, f"{name} ({which})")
 
 
