@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup test run run-profiles run-mavsdk run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
+.PHONY: setup setup-interop test run run-profiles run-px4 run-ardupilot run-mavsdk run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -19,9 +19,10 @@ test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores)
 run: setup           ## the main job: the conformance suite vs builtin:spec over UDP loopback -> reports/out/
 	$(BIN)/mavconform run --target builtin:spec --report-dir reports/out
 
-run-profiles: setup  ## the suite vs builtin:px4 / builtin:ardupilot with their expectation files: only known deviations
-	$(BIN)/mavconform run --target builtin:px4 --expect px4 --report-dir reports/px4 -q
-	$(BIN)/mavconform run --target builtin:ardupilot --expect ardupilot --report-dir reports/ardupilot -q
+run-profiles: run-px4 run-ardupilot  ## the suite vs builtin:px4 / builtin:ardupilot with their expectation files: only known deviations
+
+run-px4 run-ardupilot: run-%: setup
+	$(BIN)/mavconform run --target builtin:$* --expect $* --report-dir reports/$* -q
 
 # run-mavsdk: the one clause left out of the run against MAVSDK, and why (README, "MAVSDK's
 # MissionRawServer"): MIS.UP.16 passes, but its MISSION_COUNT 0 leaves MAVSDK 4.1.0 hung at the
@@ -33,6 +34,8 @@ MAVSDK_OUT  := reports/mavsdk
 $(VENV)/.interop-installed: $(VENV)/.installed
 	$(BIN)/python -m pip install --quiet -e '.[interop]'
 	touch $@
+
+setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk wheel) on top of setup
 
 run-mavsdk: $(VENV)/.interop-installed  ## the suite vs MAVSDK's MissionRawServer (tools/mavsdk_vehicle.py) with expectations/mavsdk.toml
 	$(BIN)/python -m pytest -q -p no:cacheprovider tests/interop/test_mavsdk_vehicle.py

@@ -34,6 +34,10 @@ from .target_uri import TargetUri
 
 TESTER_SYSTEM, TESTER2_SYSTEM, TESTER_COMPONENT = 245, 246, 190   # 190: MAV_COMP_ID_MISSIONPLANNER
 DISCOVERY_TIMEOUT = 5.0   # s for the first HEARTBEAT (heartbeats are 1 Hz), scaled
+# A builtin vehicle in a real-time run flies this many times faster than real (legs, climbs and
+# descents; holds and protocol timers keep their length), as one runs SITL with --speedup: its
+# flights are protocol exchanges spread over minutes of waiting, not what a clause judges
+BUILTIN_FLIGHT_SPEEDUP = 4.0
 
 
 def build_vehicle(uri: TargetUri, *, wall_clock: Callable[[], float] = time.time,
@@ -108,7 +112,8 @@ class Session:
             self.driver = UdpDriver(seed=seed)
             try:
                 if uri.in_process:
-                    self.vehicle = build_vehicle(uri, base=config, **uri.suite_overrides())
+                    self.vehicle = build_vehicle(uri, base=config, **uri.suite_overrides(),
+                                                 flight_speedup=BUILTIN_FLIGHT_SPEEDUP)
                     self.guard = GuardedNode(self.vehicle)
                     self.target_address = self.driver.add_node(self.guard)
                     tester_address = self.driver.add_node(self.link)
@@ -217,6 +222,7 @@ class Session:
         tester = Tester(node, self.driver, scale=self.scale)
         tester.form = self.t.form
         tester.plan_ids = self.t.plan_ids   # one record of accepted plans for all GCSs
+        tester.replaced_ids = self.t.replaced_ids
         tester.exchange = self.t.exchange
         record_traffic(tester)
         # announce it (a HEARTBEAT), so the target learns where it lives

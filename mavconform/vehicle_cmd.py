@@ -80,6 +80,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "(the px4 and ardupilot profiles model that in the suite; served here, any GCS may "
                         "connect unless this is given)")
     p.add_argument("--speed", type=positive, default=10.0, metavar="M/S", help="flight speed (default 10)")
+    p.add_argument("--flight-speedup", type=positive, default=1.0, metavar="N",
+                   help="fly N times faster than real, as SITL's --speedup: legs, climbs and descents; "
+                        "holds, loiters and every protocol timer keep their real length (default 1)")
     p.add_argument("--duration", type=positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     p.add_argument("--capture", metavar="FILE.mcap", help="record every datagram to an MCAP file")
     p.add_argument("--quiet", action="store_true", help="print only the listening line")
@@ -120,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
     roster = _roster(args)
     config = dataclasses.replace(profile.config, system=args.system, component=args.component,
                                  autostart=args.autostart, speed=args.speed, behaviour=behaviour,
-                                 single_peer_link=args.single_peer, control=_control(args))
+                                 flight_speedup=args.flight_speedup, single_peer_link=args.single_peer,
+                                 control=_control(args))
     if roster is not None:
         config = dataclasses.replace(config, roster=roster, require_signature=not args.accept_unsigned)
     if scenario is not None:

@@ -113,11 +113,16 @@ class _Path:
 class FlightSim:
     def __init__(self, store: MissionStore, progress: MissionProgress, *,
                  home: Position = Position(47.397742, 8.545594, 0.0), speed: float = 10.0,
-                 battery: FlightBattery | None = None, ground: bool = False) -> None:
+                 battery: FlightBattery | None = None, ground: bool = False, speedup: float = 1.0) -> None:
         self.store = store
         self.progress = progress
         self.home = home
-        self.speed = speed
+        # `speedup` (like SITL's --speedup, for motion only): every leg, climb and descent is
+        # flown that many times faster; a hold or loiter lasts what the plan says, and the
+        # protocol's timers are untouched (their timing is what the clauses judge)
+        self.speed = speed * speedup
+        self.climb_speed = CLIMB_SPEED * speedup
+        self.descent_speed = DESCENT_SPEED * speedup
         self.battery = battery
         self.ground = ground             # a ground vehicle: every altitude is home's, it never climbs
         self.position = Position(home.lat, home.lon, home.alt)
@@ -186,7 +191,7 @@ class FlightSim:
         horizontal = _ground_distance(here, above)
         path = _Path(here, now).to(above, horizontal / self.speed)
         if land:
-            path.to(Position(target.lat, target.lon, self.home.alt), abs(here.alt - self.home.alt) / DESCENT_SPEED)
+            path.to(Position(target.lat, target.lon, self.home.alt), abs(here.alt - self.home.alt) / self.descent_speed)
         self._start_divert(path, target, land)
 
     def climb(self, altitude: float, now: float) -> None:
@@ -198,7 +203,7 @@ class FlightSim:
         self.progress.running = False
         self._arrive_at = None
         top = Position(here.lat, here.lon, here.alt if self.ground else max(here.alt, self.home.alt + altitude))
-        self._start_divert(_Path(here, now).to(top, abs(top.alt - here.alt) / CLIMB_SPEED), top, False)
+        self._start_divert(_Path(here, now).to(top, abs(top.alt - here.alt) / self.climb_speed), top, False)
 
     def hold(self, now: float) -> None:
         """Stop where the vehicle is and stay (a hover, a loiter, a rover's hold) until `start`."""
@@ -321,11 +326,11 @@ class FlightSim:
             return path.to(there, _ground_distance(here, there) / self.speed)
         if item.command in TAKEOFF_COMMANDS:   # climbs to the item's altitude (never descends)
             top = Position(lat, lon, max(here.alt, item.z))
-            return path.to(top, max(_ground_distance(here, top) / self.speed, (top.alt - here.alt) / CLIMB_SPEED))
+            return path.to(top, max(_ground_distance(here, top) / self.speed, (top.alt - here.alt) / self.climb_speed))
         if item.command in LAND_COMMANDS:      # over the spot at the current altitude, then down
             above = Position(lat, lon, here.alt)
             path.to(above, _ground_distance(here, above) / self.speed)
-            return path.to(Position(lat, lon, ground), abs(here.alt - ground) / DESCENT_SPEED)
+            return path.to(Position(lat, lon, ground), abs(here.alt - ground) / self.descent_speed)
         there = Position(lat, lon, item.z)
         dist = haversine_m(here.lat, here.lon, there.lat, there.lon)
         return path.to(there, math.hypot(dist, item.z - here.alt) / self.speed)

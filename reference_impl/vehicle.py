@@ -58,6 +58,9 @@ class VehicleConfig:
     behaviour: ServerBehaviour = ServerBehaviour()
     home: Position = Position(47.397742, 8.545594, 0.0)
     speed: float = 10.0              # m/s ground speed of the simulated flight
+    # the simulated flight runs this many times faster (legs, climbs, descents; never a hold
+    # nor a protocol timer), as SITL's --speedup: a builtin vehicle's flights in a real-time run
+    flight_speedup: float = 1.0
     autostart: bool = False          # start flying as soon as a mission is accepted
     mavlink_version: int = 2
     signing: SigningKey | None = None
@@ -123,7 +126,8 @@ class VehicleNode:
         self.server = server_class(cfg.system, cfg.component, cfg.behaviour)
         self.server.home = home_item(cfg.home)
         self.flight = FlightSim(self.server.store, self.server.progress, home=cfg.home, speed=cfg.speed,
-                                battery=cfg.battery, ground=vehicle_class(cfg.vehicle_type) is VehicleClass.GROUND)
+                                battery=cfg.battery, ground=vehicle_class(cfg.vehicle_type) is VehicleClass.GROUND,
+                                speedup=cfg.flight_speedup)
         self.frames_received = 0
         self.events: list[str] = []   # human-readable log of plan changes, for the CLI
         # autopilot_class: a test plugs in an autopilot that misbehaves (autopilot_faults.py)

@@ -133,15 +133,18 @@ def open_download(t: Tester, mission_type: MissionType | int, *, resends: int = 
 
 
 def fresh_count(t: Tester, count: Frame) -> Frame | None:
-    """`count` (a MISSION_COUNT), unless it names another plan id than the last upload the
-    vehicle accepted from this tester: then the vehicle still serves the plan from before it
-    (PX4 answers a download sent right after the ACK from its old plan, now and then), so
-    that download is ended, the vehicle is given until it reports the new plan, and the
-    list is asked for once more. The race is noted in the exchange."""
+    """`count` (a MISSION_COUNT), unless it names another plan id than the last upload or
+    clear the vehicle accepted from the session's GCSs: then the vehicle still serves the plan
+    from before it (PX4 answers a download sent right after the ACK from its old plan, now
+    and then: its navigator's stale mission topic resets MavlinkMissionManager's count and
+    id, mavlink_mission.cpp check_active_mission), so that download is ended, the vehicle is
+    given until it reports the new plan, and the list is asked for once more. The race is
+    noted in the exchange. After an operation acknowledged with id 0 (PX4 clears to id 0; a
+    vehicle without plan ids always says 0), only an id that operation replaced is stale."""
     mt = count.msg.mission_type
     expected = t.plan_ids.get(mt, 0)
     reported = getattr(count.msg, "opaque_id", 0)
-    if not expected or reported == expected:
+    if reported == expected or (not expected and reported not in t.replaced_ids.get(mt, ())):
         return count
     t.note(f"racy: the download was answered from the plan before the accepted upload (id "
            f"0x{reported:08x}, not 0x{expected:08x}); ending it and asking again once the vehicle "

@@ -63,6 +63,9 @@ class Tester:
         # mission_type -> opaque_id the vehicle's last MISSION_ACK ACCEPTED gave it, to any of
         # the session's GCSs (shared between them; kept by `record_traffic`)
         self.plan_ids: dict[int, int] = {}
+        # mission_type -> the ids a later accepted operation replaced: a MISSION_COUNT naming
+        # one of them is answered from a plan the vehicle no longer holds (shared like plan_ids)
+        self.replaced_ids: dict[int, set[int]] = {}
         # id(frame) -> (frame, its exchange event), for every received frame an exchange
         # kept; across clauses, since a shared observation's frames decide later clauses too
         self._drawn: dict[int, tuple[Frame, dict[str, Any]]] = {}
@@ -339,9 +342,12 @@ def record_traffic(tester: Tester) -> None:
     def on_frame(peer: str, now: float, frame: Frame) -> None:
         msg = frame.msg
         if msg._type == "MISSION_ACK" and msg.type == 0:   # MAV_MISSION_ACCEPTED: the plan is new
-            ids = tester.plan_ids
+            ids, replaced = tester.plan_ids, tester.replaced_ids
+            new = getattr(msg, "opaque_id", 0)
             for mt in ((0, 1, 2) if msg.mission_type == 255 else (msg.mission_type,)):
-                ids[mt] = getattr(msg, "opaque_id", 0)
+                if ids.get(mt) and ids[mt] != new:
+                    replaced.setdefault(mt, set()).add(ids[mt])
+                ids[mt] = new
         ex = tester.exchange
         if ex is not None and relevant(frame.msg._type):
             index = ex.add(now, "rx", peer, frame.msg._type, message_fields(frame.msg))

@@ -23,9 +23,11 @@ from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 
 class _TakesPlansLate(MissionServer):
-    """After each accepted mission upload: the first MISSION_REQUEST_LIST is answered from
-    the plan before it, and the first valid MISSION_SET_CURRENT is dropped (a non-empty upload: PX4's clears were never
-    seen racing)."""
+    """After each accepted non-empty mission upload: the first MISSION_REQUEST_LIST is
+    answered from the plan before it, and the first valid MISSION_SET_CURRENT is dropped.
+    After a clear of a non-empty mission, the first MISSION_REQUEST_LIST is answered from the
+    plan before it too (PX4 SIH quad, 2026-11-28: MIS.DN.04 got count 2 with the cleared
+    plan's id after the clear's ACK with id 0)."""
 
     def _commit(self, t, items, src, now):
         before = (self.store.count(t), self.store.opaque_id(t))
@@ -37,8 +39,12 @@ class _TakesPlansLate(MissionServer):
         return out
 
     def _on_clear_all(self, msg, src, now):
-        self.stale = None
-        return super()._on_clear_all(msg, src, now)
+        t = MissionType.MISSION
+        before = (self.store.count(t), self.store.opaque_id(t))
+        out = super()._on_clear_all(msg, src, now)
+        racing = msg.mission_type in (t, MissionType.ALL) and before[0] and self.store.count(t) == 0
+        self.stale = before if racing else None
+        return out
 
     def _on_request_list(self, msg, src, now):
         stale = getattr(self, "stale", None)
@@ -85,6 +91,8 @@ def test_a_vehicle_that_takes_plans_late_gets_the_same_verdicts_with_the_races_s
     assert racy_notes, "the stale download was never met: the vehicle above no longer races"
     racy_passes = [r.clause_id for r in results if r.detail.startswith("racy")]
     assert "MIS.CUR.01" in racy_passes, racy_passes
+    dn04 = next(r for r in results if r.clause_id == "MIS.DN.04")
+    assert any(e.get("dir") == "note" and "racy" in e.get("msg", "") for e in dn04.exchange), dn04.exchange
 
 
 def test_a_vehicle_that_takes_plans_at_once_draws_no_racy_note():

@@ -25,10 +25,10 @@ def item(seq: int, command: int, north_m: float | None = None, alt: float = 0.0,
     return MissionItem(seq, 3, int(command), x=x, y=y, z=alt, **kw)
 
 
-def flight(items: list[MissionItem], *, ground: bool = False) -> FlightSim:
+def flight(items: list[MissionItem], *, ground: bool = False, speedup: float = 1.0) -> FlightSim:
     store = MissionStore()
     store.commit(MissionType.MISSION, items)
-    return FlightSim(store, MissionProgress(store, 1.0), home=HOME, speed=SPEED, ground=ground)
+    return FlightSim(store, MissionProgress(store, 1.0), home=HOME, speed=SPEED, ground=ground, speedup=speedup)
 
 
 def reached(sends) -> list[int]:
@@ -113,3 +113,24 @@ def test_hold_stops_mid_leg_and_stop_puts_the_vehicle_on_the_ground():
     assert f.flying and not f.progress.running and f.where(50.0) == here and here.alt > 5
     f.stop(60.0)
     assert not f.flying and not f.progress.running and f.where(70.0) == Position(here.lat, here.lon, HOME.alt)
+
+
+@pytest.mark.parametrize("speedup", [1.0, 4.0])
+def test_a_speedup_flies_legs_climbs_and_descents_faster_but_holds_as_long(speedup):
+    """The builtin vehicles' real-time runs fly 4 times faster (conformance/session.py): the
+    same path, every leg, climb and descent `speedup` times shorter, a loiter's time unchanged."""
+    hold = 3.0
+    f = flight([item(0, Cmd.NAV_TAKEOFF, alt=20.0), item(1, Cmd.NAV_WAYPOINT, 200, alt=20.0),
+                item(2, Cmd.NAV_LOITER_TIME, 200, alt=20.0, param1=hold), item(3, Cmd.NAV_LAND, 0)],
+               speedup=speedup)
+    f.start(0.0)
+    ends = []
+    for _ in range(4):
+        at = f.next_deadline()
+        ends.append(at)
+        f.poll(at)
+    climb, leg, home_leg = 20.0 / CLIMB_SPEED, 200.0 / SPEED, 200.0 / SPEED + 20.0 / DESCENT_SPEED
+    assert ends == pytest.approx([climb / speedup, (climb + leg) / speedup,
+                                  (climb + leg) / speedup + hold, (climb + leg + home_leg) / speedup + hold],
+                                 rel=1e-3)
+    assert f.landed_at == pytest.approx(ends[-1]) and not f.airborne(ends[-1])
