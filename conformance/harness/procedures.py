@@ -146,7 +146,7 @@ def fresh_count(t: Tester, count: Frame) -> Frame | None:
     reported = getattr(count.msg, "opaque_id", 0)
     if reported == expected or (not expected and reported not in t.replaced_ids.get(mt, ())):
         return count
-    t.note(f"racy: the download was answered from the plan before the accepted upload (id "
+    t.note(f"racy: the download was answered from the plan before the accepted upload or clear (id "
            f"0x{reported:08x}, not 0x{expected:08x}); ending it and asking again once the vehicle "
            "reports the new plan")
     t.send(m.ack_message(MissionResult.OPERATION_CANCELLED, mt, t.target))
