@@ -14,7 +14,7 @@ from typing import Any, Callable
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import Cmd, MissionResult
 
-from ...outcome import ClauseFailed
+from ...outcome import ClauseFailed, PreconditionFailed
 from ..harness import GcsHarness, Operation
 from ..job import Job
 from ..scripted_vehicle import VEHICLE, ScriptedVehicle, Swap, named
@@ -61,7 +61,11 @@ def _ack_elsewhere_ignored(h: GcsHarness, address: Callable[[Peer], Peer], whom:
         decoy = scripted(op, f"its MISSION_ACK to {whom}", "MISSION_ACK", type=MissionResult.DENIED)
         to = (decoy.msg.target_system, decoy.msg.target_component)
         if not op.result.ok:
-            raise fail(h, op, decoy, f"the {job.op} ended on MISSION_ACK DENIED addressed to {to[0]}/{to[1]} "
+            clean = clean_upload(h) if job.op == "upload" else clean_clear(h)
+            if not clean.result.ok:   # not the decoy's doing: other clauses judge that
+                raise PreconditionFailed(f"the {job.op} failed, but so does one with no ACK to another GCS "
+                                         f"({clean.result.line()})")
+            raise fail(h, op, decoy, f"the {job.op} failed after MISSION_ACK DENIED addressed to {to[0]}/{to[1]} "
                                      f"({whom}), not to this GCS ({op.gcs[0]}/{op.gcs[1]}): {op.result.line()}")
         h.decide(op, decoy)
     return f"upload and clear: the DENIED to {whom} was ignored, each succeeded on its own ACCEPTED"

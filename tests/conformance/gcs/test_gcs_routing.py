@@ -74,7 +74,7 @@ def test_a_gcs_wrong_in_its_clear_only_fails_too() -> None:
     _, results = _run(NodeAdapter("clear only", build=client_mutant(_TakesClearAcksToAnyone)),
                       ("MIS.G.RT.01", "MIS.G.RT.02"))
     for r in results.values():
-        assert r.outcome is Outcome.FAIL and r.detail.startswith("the clear ended on MISSION_ACK DENIED"), r
+        assert r.outcome is Outcome.FAIL and r.detail.startswith("the clear failed after MISSION_ACK DENIED"), r
 
 
 def test_the_set_current_command_may_go_to_component_0_but_mission_messages_may_not() -> None:
@@ -101,8 +101,8 @@ def test_set_current_by_command_is_resent_and_judged_alike() -> None:
 
 def test_the_mutants_fail_with_what_they_did() -> None:
     expected = {
-        "ack-to-any-system": ("MIS.G.RT.01", "the upload ended on MISSION_ACK DENIED addressed to 254/190"),
-        "ack-to-any-component": ("MIS.G.RT.02", "the upload ended on MISSION_ACK DENIED addressed to 255/191"),
+        "ack-to-any-system": ("MIS.G.RT.01", "the upload failed after MISSION_ACK DENIED addressed to 254/190"),
+        "ack-to-any-component": ("MIS.G.RT.02", "the upload failed after MISSION_ACK DENIED addressed to 255/191"),
         "broadcast-component": ("MIS.G.RT.03", "MISSION_COUNT went to 1/0, not to the vehicle's 1/1"),
         "no-set-current-resend": ("MIS.G.SC.03", "MISSION_SET_CURRENT was sent 1 time(s)"),
     }
@@ -110,3 +110,15 @@ def test_the_mutants_fail_with_what_they_did() -> None:
         _, results = _run(NodeAdapter(name, build=GCS_MUTANTS[name].build), (clause,))
         assert results[clause].outcome is Outcome.FAIL and results[clause].detail.startswith(detail), (
             name, results[clause].detail)
+
+
+class _NeverHearsClearAcks(MissionClient):
+    def _addressed_to_us(self, msg):
+        return not (msg._type == "MISSION_ACK" and self.busy and self._op.clearing is not None) \
+            and super()._addressed_to_us(msg)
+
+
+def test_a_gcs_that_fails_every_clear_is_not_blamed_on_the_ack_to_another() -> None:
+    _, results = _run(NodeAdapter("deaf clears", build=client_mutant(_NeverHearsClearAcks)), ("MIS.G.RT.01",))
+    r = results["MIS.G.RT.01"]
+    assert r.outcome is Outcome.ERROR and "so does one with no ACK to another GCS" in r.detail, r
