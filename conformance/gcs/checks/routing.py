@@ -28,9 +28,9 @@ Peer = tuple[int, int]
 
 
 def other_system(gcs: Peer) -> Peer:
-    """Another GCS: the next system id down (never 0, never the vehicle's), same component."""
-    system = gcs[0] - 1 if gcs[0] > 2 else gcs[0] + 1
-    return (system if system != VEHICLE[0] else system + 1), gcs[1]
+    """Another GCS: the next system id down, or up from 1 and 2 (so never 0, nor the
+    vehicle's 1), same component."""
+    return (gcs[0] - 1 if gcs[0] > 2 else gcs[0] + 1), gcs[1]
 
 
 def other_component(gcs: Peer) -> Peer:
