@@ -190,12 +190,13 @@ COVERAGE: tuple[Entry, ...] = (
        why="the GCS's side (MIS.G.CN.01): after the vehicle's OPERATION_CANCELLED it sends nothing more for "
            "the download and reports it failed"),
     _e("529.1", "A timeout should be set for all messages that require a response.",
-       "MIS.UP.06, MIS.G.UP.05, MIS.G.UP.06, MIS.G.DN.03, MIS.G.DN.04, MIS.G.CL.02",
+       "MIS.UP.06, MIS.G.UP.05, MIS.G.UP.06, MIS.G.DN.03, MIS.G.DN.04, MIS.G.CL.02, MIS.G.SC.03",
        why="seen through its effect, the message resent when it expires: the vehicle's requests during an "
-           "upload (MIS.UP.06); the GCS's last item, MISSION_COUNT, MISSION_REQUEST_LIST, item requests and "
-           "MISSION_CLEAR_ALL (MIS.G.*)"),
+           "upload (MIS.UP.06); the GCS's last item, MISSION_COUNT, MISSION_REQUEST_LIST, item requests, "
+           "MISSION_CLEAR_ALL and set-current (MIS.G.*; set-current has no specific timeout, 482, so any "
+           "the GCS has will do)"),
     _e("529.2", "If the expected response is not received before the timeout then the message must be resent.",
-       "MIS.UP.06, MIS.G.UP.05, MIS.G.UP.06, MIS.G.DN.03, MIS.G.DN.04, MIS.G.CL.02"),
+       "MIS.UP.06, MIS.G.UP.05, MIS.G.UP.06, MIS.G.DN.03, MIS.G.DN.04, MIS.G.CL.02, MIS.G.SC.03"),
     _e("529.3", "If no response is received after a number of retries then the client must cancel the operation "
        "and return to an idle state.", "MIS.UP.08, MIS.G.UP.07, MIS.G.DN.10, MIS.G.TO.03",
        why="the GCS gives a silent vehicle up, upload (MIS.G.UP.07) and download (MIS.G.DN.10), but not before "

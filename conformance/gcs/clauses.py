@@ -6,14 +6,18 @@ the final ACK is lost), must keep the plan types apart, and ends every download 
 ACK. Each sentence that says so is a clause here, with the same rules as the vehicle's
 catalogue: the source's own modal word sets the level, ids are stable. The timing clauses
 take the spec's recommended values (1500 ms, 5 retries) with the same tolerance the
-vehicle's MIS.UP.07 allows: from half to twice the value.
+vehicle's MIS.UP.07 allows: from half to twice the value. The addressing clauses (G.RT) take
+seed 001's routing rules, for what the GCS takes as its own, and upstream minimal.xml's
+MAV_COMPONENT, for where it sends: the vehicle's component, broadcast (0) being legal but
+reaching every component of the vehicle, hence a SHOULD.
 """
 
 from __future__ import annotations
 
-from ..clause import SEED_000, Clause, Level, Role
+from ..clause import SEED_000, SEED_001, Clause, Level, Role
 
 MUST, SHOULD = Level.MUST, Level.SHOULD
+MINIMAL = "mavlink-upstream/minimal.xml"   # MAV_COMPONENT: what a component id is for
 
 
 def _g(id: str, level: Level, title: str, source: str, requirement: str) -> Clause:
@@ -122,5 +126,20 @@ GCS_CLAUSES: tuple[Clause, ...] = (
     _g("MIS.G.SC.02", SHOULD, "Set-current is not sent again once MISSION_CURRENT has confirmed it",
        f"{SEED_000}:484", "The acknowledgment of the message is via broadcast of mission/system status, which "
        "is not associated with the original message."),
+    _g("MIS.G.SC.03", MUST, "Set-current is resent when no MISSION_CURRENT confirms it, and then succeeds",
+       f"{SEED_000}:529", "A timeout should be set for all messages that require a response. If the expected "
+       "response is not received before the timeout then the message must be resent."),
+    # --- addressing (seed 001's routing; the XML's target fields) ---------------------------------
+    _g("MIS.G.RT.01", MUST, "A MISSION_ACK addressed to another system is not taken for the GCS's own",
+       f"{SEED_001}:96", "The target_system matches its system id and target_component is broadcast "
+       "(target_component omitted or zero)."),
+    _g("MIS.G.RT.02", MUST, "A MISSION_ACK addressed to another component of the GCS's system, one heard on "
+       "the link, is not taken for the GCS's own",
+       f"{SEED_001}:97", "The target_system matches its system id and has the component's target_component"),
+    _g("MIS.G.RT.03", SHOULD, "Mission messages are addressed to the vehicle's system and component from its "
+       "HEARTBEAT, not broadcast",
+       f"{MINIMAL}:315", "Component IDs are used for addressing messages to a particular component within a "
+       "system. A component can use any unique ID between 1 and 255 (MAV_COMP_ID_ALL value is the broadcast "
+       "address, used to send to all components)."),
 )
 

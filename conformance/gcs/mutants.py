@@ -6,7 +6,9 @@ knob; the bugs are ones real ground stations and SDKs have had (MAVSDK, MAVProxy
 DroneKit, ...). `breaks` lists exactly the clauses the change fails: the negative-control
 tests (tests/conformance/gcs/test_gcs_negative_controls.py) assert that each of them
 fails on the mutant, that every other GCS clause passes, and that every GCS clause is
-broken by some mutant. `build` has the `NodeAdapter` builder's signature.
+broken by some mutant. `build` has the `NodeAdapter` builder's signature. The set-current
+mutants are in mutants_current.py, the addressing ones in mutants_routing.py; both register
+here when this module is imported.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Any
 
 from mavconform.reference_impl.gcs import GcsConfig, GcsNode
 from mavconform.reference_impl.mission import messages as m
-from mavconform.reference_impl.mission.actions import Finished, Send
+from mavconform.reference_impl.mission.actions import Send
 from mavconform.reference_impl.mission.client import MissionClient
 from mavconform.reference_impl.mission.constants import MissionResult
 from mavconform.reference_impl.mission.items import MissionType, renumber
@@ -364,48 +366,9 @@ gcs_mutant("any-clear-ack-succeeds", "reports a clear done on any MISSION_ACK, a
            {"MIS.G.CL.03"}, client_mutant(_AnyClearAckIsSuccess))
 
 
-# --- set current -------------------------------------------------------------------------------
-class _SetCurrentPlusOne(MissionClient):
-    def set_current(self, seq, now, *, via_command=False):
-        return super().set_current(seq + 1, now, via_command=via_command)   # "seq 0 is home"
-
-
-class _SetCurrentLingers(MissionClient):
-    """Its resend timer outlives the confirmation: one more set-current goes out after it."""
-
-    _linger: tuple[float, Any] | None = None
-
-    def _on_set_current_reply(self, op, msg, name, now):
-        out = super()._on_set_current_reply(op, msg, name, now)
-        if op is not None and any(isinstance(a, Finished) for a in out):
-            self._linger = (now + self.timings.default_timeout, op.last_sent)
-        return out
-
-    def poll(self, now):
-        out = super().poll(now)
-        if self._linger is not None and now >= self._linger[0]:
-            out.append(self._to_target(self._linger[1]))
-            self._linger = None
-        return out
-
-    def next_deadline(self):
-        times = [t for t in (super().next_deadline(), self._linger and self._linger[0]) if t is not None]
-        return min(times) if times else None
-
-
-class _IgnoresMissionCurrent(MissionClient):
-    def _on_set_current_reply(self, op, msg, name, now):
-        if name == "MISSION_CURRENT":
-            return []   # waits for an answer of its own to the set-current
-        return super()._on_set_current_reply(op, msg, name, now)
-
-
-gcs_mutant("set-current-plus-one", "sends set-current for seq+1, taking seq 0 for the home position",
-           {"MIS.G.SC.01"}, client_mutant(_SetCurrentPlusOne))
-gcs_mutant("ignores-mission-current", "ignores MISSION_CURRENT: resends set-current until it gives up",
-           {"MIS.G.SC.01", "MIS.G.SC.02"}, client_mutant(_IgnoresMissionCurrent))
-gcs_mutant("set-current-lingers", "resends set-current once more after MISSION_CURRENT confirmed it",
-           {"MIS.G.SC.02"}, client_mutant(_SetCurrentLingers))
+# the set-current mutants and the addressing ones have modules of their own; importing them
+# here registers them with the rest
+from . import mutants_current, mutants_routing  # noqa: E402,F401
 
 
 __all__ = ["GCS_MUTANTS", "GcsMutant", "gcs_mutant", "client_mutant"]

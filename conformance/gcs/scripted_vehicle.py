@@ -11,6 +11,7 @@ The script is a list of `Rule`s, each used up after `times` firings (None: every
 `Deaf` (the vehicle does not hear a message), `Swap` (one of its replies is replaced by other
 messages, and optionally sent after a delay), `Mute` (it says nothing once a message has
 come). Every firing is a note in the log, so the report shows what the vehicle did on purpose.
+A swap may also pass on another node's message (`relay`), as a vehicle that routes does.
 
 Sans-IO like every node: `datagram_received`, `poll`, `next_deadline`, `take_outgoing`; it
 learns the GCS's address from the first datagram (the GCS speaks first) and only then
@@ -28,6 +29,7 @@ from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import Cmd, CommandResult, MissionResult
 from mavconform.reference_impl.mission.items import PLAN_TYPE_BY_VALUE, MissionItem, MissionType
 from mavconform.reference_impl.net.node import Address
+from mavconform.reference_impl.wire.codec import FrameEncoder
 from mavconform.reference_impl.wire.dialect import mavlink as _d
 
 VEHICLE = (1, 1)
@@ -111,6 +113,7 @@ class ScriptedVehicle:
         self._upload: dict[str, Any] | None = None      # the upload being received
         self._finished: tuple[MissionType, int] | None = None   # the last upload completed
         self._later: list[tuple[float, Any]] = []
+        self._relays: dict[tuple[int, int], FrameEncoder] = {}
         self._next_heartbeat: float | None = None
         self._now = 0.0
         if self.call is not None:
@@ -183,6 +186,15 @@ class ScriptedVehicle:
 
     def later(self, delay: float, msg: Any) -> None:
         self._later.append((self._now + delay, msg))
+
+    def relay(self, msg: Any, source: tuple[int, int]) -> None:
+        """Send `msg` to the GCS as if from `source`, another node on the link (another
+        GCS's HEARTBEAT), passed on as a router does: the GCS then knows that node is there."""
+        encoder = self._relays.get(source)
+        if encoder is None:
+            encoder = self._relays[source] = FrameEncoder(*source, version=2)
+        self._note(self._now, f"passed on: {_label(msg)} from {source[0]}/{source[1]}")
+        self.endpoint.send_raw(encoder.encode(msg), self.gcs)
 
     @property
     def target(self) -> tuple[int, int]:

@@ -204,7 +204,7 @@ class MissionClient:
         name = msg._type
         if name in _STREAMED:
             return self._on_set_current_reply(self._op, msg, name, now) if self._op else []
-        if getattr(msg, "target_system", 0) not in (0, self.system):
+        if not self._addressed_to_us(msg):
             return []
         op = self._op
         if name in (m.REQUEST_INT, m.REQUEST_FLOAT):
@@ -223,6 +223,13 @@ class MissionClient:
         if op.operation is Operation.SET_CURRENT:
             return self._on_set_current_reply(op, msg, name, now)
         return []
+
+    def _addressed_to_us(self, msg: Any) -> bool:
+        """Seed 001's routing rule: ours when its target_system is ours (or 0, broadcast) and
+        its target_component ours (or 0). Another GCS's reply on a shared link (a system or a
+        component of ours beside this one) is not an answer to our operation."""
+        return (getattr(msg, "target_system", 0) in (0, self.system)
+                and getattr(msg, "target_component", 0) in (0, self.component))
 
     def poll(self, now: float) -> list[Action]:
         op = self._op

@@ -86,6 +86,18 @@ def test_upload_ack_of_another_type_is_not_ours():
     assert s.results == [] and s.engine.busy
 
 
+def test_an_ack_addressed_to_another_system_or_component_is_not_ours():
+    # seed 001's routing: another GCS's reply on a shared link is not about our operation
+    for target in [(GCS[0] - 1, GCS[1]), (GCS[0], GCS[1] + 1)]:
+        s = client()
+        s.call(s.engine.upload(T.MISSION, plan(1), s.now))
+        s.feed(req(0), VEHICLE)
+        s.feed(m.ack_message(R.DENIED, T.MISSION, target), VEHICLE)
+        assert s.results == [] and s.engine.busy, target
+        s.feed(m.ack_message(R.ACCEPTED, T.MISSION, (GCS[0], 0)), VEHICLE)   # broadcast component: ours
+        assert result(s).ok
+
+
 def test_upload_early_accept_is_a_protocol_error():
     s = client()
     s.call(s.engine.upload(T.MISSION, plan(3), s.now))

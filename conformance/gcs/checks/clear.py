@@ -10,13 +10,13 @@ from ..harness import GcsHarness
 from ..job import Job
 from ..scripted_vehicle import Deaf, Swap, named
 from . import check
-from .common import (MISSION, fail, first_told, mission_sent, names, require_failure,
+from .common import (MISSION, clean_clear, fail, first_told, mission_sent, names, require_failure,
                      require_success, resent, stored)
 
 
 @check("MIS.G.CL.01")
 def clear_sent(h: GcsHarness) -> str:
-    op = h.run(Job("clear", MISSION), plans=stored())
+    op = clean_clear(h)
     clears = op.sent("MISSION_CLEAR_ALL")
     if not clears:
         raise fail(h, op, None, f"clearing sent {names(mission_sent(op))}, no MISSION_CLEAR_ALL ({op.result.line()})")

@@ -76,6 +76,10 @@ def clean_download(h: GcsHarness) -> Operation:
     return h.observe("clean download", download_job(), plans=stored())
 
 
+def clean_clear(h: GcsHarness) -> Operation:
+    return h.observe("clean clear", Job("clear", MISSION), plans=stored())
+
+
 def silent_to_count(h: GcsHarness) -> Operation:
     return h.observe("silent to MISSION_COUNT", upload_job(),
                      rules=[Deaf(named("MISSION_COUNT"), times=None, what="every MISSION_COUNT")])
