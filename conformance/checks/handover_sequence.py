@@ -74,7 +74,7 @@ from ..harness import flight as flying
 from ..harness.flight_plan import landing_item, takeoff_item
 from ..harness.flight_styles import FlightStyle
 from ..harness.landing import land_and_disarm
-from ..harness.vehicle_watch import VehicleWatch
+from ..harness.vehicle_watch import InboxReader, VehicleWatch
 from ..harness import procedures
 from ..harness.match import msg
 from ..harness.measured import Measured
@@ -202,24 +202,6 @@ def _since(t: Tester, when: float) -> list[tuple[float, Frame]]:
     inbox = t.node.inbox
     start = bisect.bisect_left(inbox, when, key=lambda entry: entry[0])
     return inbox[start:]
-
-
-class _Reader:
-    """A tester's inbox read forward from a time: what came since the last look."""
-
-    def __init__(self, t: Tester, since: float) -> None:
-        self.t, self.last = t, since
-        self._pos: int | None = None
-
-    def new(self) -> list[tuple[float, Frame]]:
-        inbox = self.t.node.inbox
-        if self._pos is None or self._pos > len(inbox):   # first look, or the inbox was trimmed
-            self._pos = bisect.bisect_left(inbox, self.last, key=lambda entry: entry[0])
-        out = inbox[self._pos:]
-        self._pos = len(inbox)
-        if out:
-            self.last = out[-1][0]
-        return out
 
 
 def _position(frame: Frame) -> GeoPoint | None:
@@ -420,7 +402,7 @@ def _flight_wait(flight: _Flight) -> float:
 
 def _ended(flight: _Flight) -> Callable[[], bool]:
     last = flight.last_seq
-    reader = _Reader(flight.a, flight.started)
+    reader = InboxReader(flight.a, flight.started)
     done = [False]
 
     def check() -> bool:
@@ -464,7 +446,7 @@ def _await_invitation(s: Session, flight: _Flight) -> tuple[float, Frame]:
     inside the region for the dwell and INVITE_GRACE: it has no mission computer, and every
     HO.SEQ clause is not-applicable (remembered for the run)."""
     route, a, b = flight.route, flight.a, flight.b
-    positions, inbox_b = _Reader(a, flight.started), _Reader(b, flight.started)
+    positions, inbox_b = InboxReader(a, flight.started), InboxReader(b, flight.started)
     ended = _ended(flight)
     state: dict[str, Any] = {"inside": None, "invitation": None}
     grace = (route.dwell + INVITE_GRACE) * s.scale
@@ -592,7 +574,7 @@ def _after_grant(s: Session, obs: _Cooperative, flight: _Flight) -> None:
     obs.new_command = _command(b)
     watch = (route.dwell + WATCH_EXTRA) * s.scale
     a.note(f"the vehicle holds in the region: watched {watch:g} s for a new handover")
-    reader = _Reader(a, watch_from)
+    reader = InboxReader(a, watch_from)
 
     def reinvited() -> bool:
         for _, frame in reader.new():
@@ -821,7 +803,7 @@ def _silent(s: Session, route: Route) -> _Silent:
 
 def _watch_bound(s: Session, obs: _Silent, invitation: Frame) -> None:
     a, b = obs.a, obs.b
-    reader = _Reader(a, a.now())
+    reader = InboxReader(a, a.now())
     timeout = cm.clamp_timeout(invitation.msg.param3)
     for _ in range(1000):   # bounded: at most one request per CONTROL_STATUS, and the window ends
         left = obs.until - a.now()

@@ -25,8 +25,9 @@ STOPPED_MS = 1.0        # m/s ground speed below which it has stopped
 
 
 class InboxReader:
-    """A tester's inbox read forward from a time: what came since the last look (the inbox
-    may be trimmed under it: `Tester.mark` forgets old frames of a chatty target)."""
+    """A tester's inbox read forward from a time (frames at that time included): what came
+    since the last look. The inbox may be trimmed under it (`Tester.mark` forgets old frames
+    of a chatty target): then it finds its place again after the last frame it returned."""
 
     def __init__(self, t: Tester, since: float) -> None:
         self.t, self.last = t, since
@@ -34,7 +35,9 @@ class InboxReader:
 
     def new(self) -> list[tuple[float, Frame]]:
         inbox = self.t.node.inbox
-        if self._pos is None or self._pos > len(inbox):   # first look, or the inbox was trimmed
+        if self._pos is None:   # first look: from `since` on
+            self._pos = bisect.bisect_left(inbox, self.last, key=lambda entry: entry[0])
+        elif self._pos > len(inbox):   # trimmed: after the last frame returned
             self._pos = bisect.bisect_right(inbox, self.last, key=lambda entry: entry[0])
         out = inbox[self._pos:]
         self._pos = len(inbox)
