@@ -60,9 +60,39 @@ def pytest_unconfigure(config: pytest.Config) -> None:
         signal.signal(signal.SIGTERM, _STATE.pop("previous_sigterm"))
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_keyboard_interrupt(excinfo: pytest.ExceptionInfo) -> None:
     if "prepared" in _STATE:
         _STATE["interrupted_by"] = _STATE.get("signal", "SIGINT")
+        _give_every_entry_a_line(excinfo)
+
+
+def _give_every_entry_a_line(excinfo: pytest.ExceptionInfo) -> None:
+    """An interrupt lands between any two bytecodes; on CPython 3.11 some have no line
+    number, so a traceback entry's tb_lineno is None and pytest's terminal reporter, which
+    subtracts 1 from it, dies with a TypeError instead of reporting the interrupt (exit 1,
+    not 2). Runs before that reporter: each such entry gets its function's first line."""
+    exc: BaseException | None = excinfo.value
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        if exc.__traceback__ is not None:
+            exc.__traceback__ = _numbered(exc.__traceback__)
+        exc = exc.__cause__ or exc.__context__
+    excinfo.traceback = type(excinfo.traceback)(_numbered(excinfo.tb))
+
+
+def _numbered(tb):
+    import types
+    entries = []
+    while tb is not None and len(entries) < 10_000:
+        entries.append(tb)
+        tb = tb.tb_next
+    rebuilt = None
+    for entry in reversed(entries):
+        line = entry.tb_lineno if entry.tb_lineno is not None else entry.tb_frame.f_code.co_firstlineno
+        rebuilt = types.TracebackType(rebuilt, entry.tb_frame, entry.tb_lasti, line)
+    return rebuilt
 
 
 def _prepared(config: pytest.Config):
