@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup setup-interop test run run-profiles run-px4 run-ardupilot run-mavsdk run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
+.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -18,6 +18,9 @@ test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores)
 
 run: setup           ## the main job: the conformance suite vs builtin:spec over UDP loopback -> reports/out/
 	$(BIN)/mavconform run --target builtin:spec --report-dir reports/out
+
+run-links: setup     ## the suite vs the reference vehicle over UDP, TCP and ptys at 57600 / 921600 baud: same verdicts
+	$(BIN)/python tools/run_over_links.py --out reports/links
 
 run-profiles: run-px4 run-ardupilot  ## the suite vs builtin:px4 / builtin:ardupilot with their expectation files: only known deviations
 

@@ -66,6 +66,7 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
             "interrupted_at": run.interrupted_at, "interrupted_by": run.interrupted_by,
             **({"handover_scenario": options.handover_scenario} if options.handover_scenario else {}),
             **({"role": options.role} if options.role != "vehicle" else {}),
+            **({"link": dict(run.link)} if run.link is not None else {}),
         },
         "identity": identity,
         "summary": {"total": len(run.results), **counts, "gating_failures": failing,
@@ -81,7 +82,8 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
                      "forced_wait_s": round(run.forced_wait_s, 3),
                      "address": address, "clauses": per_clause,
                      **({"identity": measured_identity} if measured_identity else {}),
-                     **({"receive_queue": dict(run.receive_queue)} if run.receive_queue is not None else {})},
+                     **({"receive_queue": dict(run.receive_queue)} if run.receive_queue is not None else {}),
+                     **({"link": dict(run.link_events)} if run.link_events is not None else {})},
     }
 
 

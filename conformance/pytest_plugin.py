@@ -213,6 +213,7 @@ def _write(p, session, results, restore, started, capture) -> None:
                      interrupted=interrupted_by is not None,
                      interrupted_at=(not_run[0] if not_run else "restore") if interrupted_by else None,
                      interrupted_by=interrupted_by, receive_queue=session.receive_facts(),
+                     link=session.link_facts, link_events=session.link_events(),
                      flights=list(session.flights))
     gating.apply_expectations(run.results, p.expected)
     flags, summary = gating.gate(run.results, strict=p.options.strict, baseline=p.baseline)

@@ -57,6 +57,10 @@ class RunOutcome:
     snapshot: dict[str, int] = field(default_factory=dict)
     # our sockets' receive queues (Session.receive_facts): datagrams dropped, buffer granted
     receive_queue: dict[str, int | None] | None = None
+    # the link to the target and the timing the suite used (Session.link_facts), and what
+    # happened to a stream link during the run (Session.link_events: volatile)
+    link: dict | None = None
+    link_events: dict | None = None
     # how each flight ended (Session.flights): a vehicle left armed fails the run
     flights: list[dict] = field(default_factory=list)
 
@@ -195,7 +199,8 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
                 record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
             return RunOutcome(results, None, {"status": "skipped", "detail": "the target never answered"},
                               time.monotonic() - started, 0.0, unresponsive=str(exc),
-                              receive_queue=session.receive_facts())
+                              receive_queue=session.receive_facts(), link=session.link_facts,
+                              link_events=session.link_events())
         if restore:
             phase = "reading the target's plans"
             snapshot = _snapshot(session)
@@ -246,7 +251,8 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
                       unresponsive=dead, discovery_s=discovered, interrupted=interrupted,
                       interrupted_at=phase if interrupted else None,
                       interrupted_by=how if interrupted else None,
-                      receive_queue=session.receive_facts(), flights=list(session.flights))
+                      receive_queue=session.receive_facts(), flights=list(session.flights),
+                      link=session.link_facts, link_events=session.link_events())
 
 
 def interrupted_before_start(clauses: Iterable[Clause], how: str | None,

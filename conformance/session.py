@@ -19,6 +19,7 @@ from typing import Any, Callable
 
 from mavconform.reference_impl.mission.messages import is_vehicle_heartbeat
 from mavconform.reference_impl.net.guard import GuardedNode
+from mavconform.reference_impl.net.links import attach
 from mavconform.reference_impl.net.receive_queue import total_drops
 from mavconform.reference_impl.net.shared_link import SharedLink
 from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
@@ -26,6 +27,7 @@ from mavconform.reference_impl.net.udp import UdpDriver
 from mavconform.reference_impl.net.uri import local_bind_for
 from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
+from .harness.link_timing import link_facts
 from .harness.tester import Tester, record_traffic
 from .harness.stored_form import form_for_target, form_of_behaviour
 from .harness.tester_node import TesterNode
@@ -121,12 +123,10 @@ class Session:
                     # in-process, the vehicle may know us from the start: no 1 s wait for
                     # its first HEARTBEAT to find a listener
                     self.vehicle.endpoint.add_address(tester_address)
-                elif uri.kind == "udp":
-                    self.driver.add_node(self.link, bind=(local_bind_for(uri.udp.host), 0))
-                    self.target_address = uri.udp.address
-                    node.endpoint.add_address(self.target_address)
-                else:  # udpin: the target finds us
-                    self.driver.add_node(self.link, bind=uri.udp.address)
+                else:   # udpin: the target finds us (its address is learnt on discovery)
+                    self.target_address, _ = attach(self.driver, self.link, uri.link)
+                    if self.target_address is not None:
+                        node.endpoint.add_address(self.target_address)
             except BaseException:
                 self.driver.close()
                 raise
@@ -137,7 +137,10 @@ class Session:
         self.capture = capture   # its `mark`, if it has one, labels where each clause starts
         if capture is not None:
             self.driver.add_capture(capture)
+        self.stream = None if virtual else self.driver.stream_of(self.link)   # tcp:, serial: ...
+        self.link_facts = link_facts("in-process" if uri.in_process else uri.kind, self.stream)
         self.t = Tester(node, self.driver, scale=scale)
+        self.t.link_allowance = self.link_facts["reply_allowance_s"]
         record_traffic(self.t)
 
     # --- lifecycle ------------------------------------------------------------------------
@@ -220,6 +223,7 @@ class Session:
             node.receive_queue = self.driver.receive_queue(node)
         node.endpoint.add_address(self.target_address)
         tester = Tester(node, self.driver, scale=self.scale)
+        tester.link_allowance = self.t.link_allowance
         tester.form = self.t.form
         tester.plan_ids = self.t.plan_ids   # one record of accepted plans for all GCSs
         tester.replaced_ids = self.t.replaced_ids
@@ -259,6 +263,17 @@ class Session:
         queues = [self.driver.receive_queue(node) for node in self._sockets]
         granted = [q.granted for q in queues if q.granted is not None]
         return {"dropped": total_drops(queues), "buffer_bytes": min(granted) if granted else None}
+
+    def link_events(self) -> dict[str, Any] | None:
+        """For the run's report (volatile): what happened to a stream link (connections,
+        losses, bytes, frames dropped while it was down); None on UDP."""
+        if self.stream is None:
+            return None
+        facts = self.stream.describe()
+        facts.pop("uri"), facts.pop("kind"), facts.pop("bytes_per_second")
+        start = self.t.now()
+        facts["history"] = [{**h, "t": round(h["t"] - start, 3)} for h in facts["history"]]
+        return facts
 
     def testers(self) -> list[Tester]:
         return [self.t] + ([self._second] if self._second is not None else []) + list(self._more.values())

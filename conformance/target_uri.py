@@ -9,8 +9,11 @@
                        `mavconform clauses --mutants` lists them), also over loopback;
 - `udp:HOST:PORT`      a target listening at HOST:PORT; we send first (our HEARTBEAT);
 - `udpin:[HOST:]PORT`  we listen at HOST:PORT (default host 127.0.0.1) and the target sends
-                       to us first, as SITL does.
-The UDP forms are parsed by reference_impl.net.uri, the one parser every command's and
+                       to us first, as SITL does;
+- `tcp:HOST:PORT`      a target serving TCP there (ArduPilot SITL's 5760, INAV's 5760+n-1);
+- `tcpin:[HOST:]PORT`  we listen for the target's TCP connection;
+- `serial:DEVICE[:BAUD]` a flight controller on a serial port (57600 baud by default).
+The link forms are parsed by reference_impl.net.uri, the one parser every command's and
 plugin's addresses go through, so `run`, `fuzz`, `gcs`, `vehicle` and `proxy` agree.
 A bad URI is the user's mistake: one `UsageError` line quoting it.
 
@@ -52,6 +55,7 @@ loaded with a scenario that has GCS keys, let it accept unsigned frames
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
@@ -61,11 +65,12 @@ from mavconform.reference_impl.handover.control_manager import ManagerConfig
 from mavconform.reference_impl.handover.mission_computer import MissionComputerConfig
 from mavconform.reference_impl.handover.scenario import SCENARIOS_DIR, Scenario, load_scenario, scenario_path
 from mavconform.reference_impl.handover.scenario_fleet import mission_computer_config
-from mavconform.reference_impl.net.uri import (FORMS as UDP_FORMS, SCHEMES as UDP_SCHEMES, UdpUri,
-                                                parse_udp_uri)
+from mavconform.reference_impl.net.uri import FORMS as LINK_FORMS
+from mavconform.reference_impl.net.uri import LinkUri, UdpUri, parse_link_uri
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES
 
-FORMS = f"builtin:{'|'.join(BUILTIN_PROFILES)}, mutant:NAME, {UDP_FORMS}"
+FORMS = f"builtin:{'|'.join(BUILTIN_PROFILES)}, mutant:NAME, {LINK_FORMS}"
+LINK_KINDS = ("udp", "udpin", "tcp", "tcpin", "serial")
 
 # The system manager `builtin:spec` (and every HO mutant) runs under the suite: the reference
 # manager's defaults (1 Hz CONTROL_STATUS, 5 s owner loss, a 10 s takeover window), open to
@@ -109,9 +114,9 @@ def load_handover_scenario(text: str, option: str = "--handover-scenario") -> Sc
 
 @dataclass(frozen=True)
 class TargetUri:
-    kind: str                 # builtin | mutant | udp | udpin
+    kind: str                 # builtin | mutant | udp | udpin | tcp | tcpin | serial
     name: str = ""            # profile or mutant name
-    udp: UdpUri | None = None
+    link: LinkUri | None = None
     # what the target's mission computer was loaded with (--handover-scenario); None: the
     # conformance scenario (`handover_scenario`)
     scenario: Scenario | None = None
@@ -121,7 +126,12 @@ class TargetUri:
         return self.kind in ("builtin", "mutant")
 
     def __str__(self) -> str:
-        return f"{self.kind}:{self.name}" if self.in_process else str(self.udp)
+        return f"{self.kind}:{self.name}" if self.in_process else str(self.link)
+
+    @property
+    def udp(self) -> UdpUri | None:
+        """The UDP address, for a udp: or udpin: target."""
+        return self.link if isinstance(self.link, UdpUri) else None
 
     @property
     def handover_scenario(self) -> Scenario:
@@ -143,7 +153,7 @@ class TargetUri:
 
 
 def parse_target(text: str) -> TargetUri:
-    """builtin: and mutant: here; udp: and udpin: by the one UDP address parser."""
+    """builtin: and mutant: here; the links (udp:, tcp:, serial:, ...) by the one link parser."""
     raw = text.strip()
     scheme, sep, rest = raw.partition(":")
     scheme = scheme.lower()
@@ -160,7 +170,9 @@ def parse_target(text: str) -> TargetUri:
             raise UsageError(f"bad target {text!r}: unknown mutant {rest!r} "
                              "(list them with `mavconform clauses --mutants`)")
         return TargetUri("mutant", rest)
-    if scheme in UDP_SCHEMES:
-        udp = parse_udp_uri(raw)
-        return TargetUri(udp.mode, udp=udp)
+    if scheme in LINK_KINDS:
+        link = parse_link_uri(raw)
+        if scheme == "serial" and not os.path.exists(link.device):   # before any report folder
+            raise UsageError(f"cannot open serial port {link.device}: No such file or directory")
+        return TargetUri(link.mode, link=link)
     raise UsageError(f"bad target {text!r}: unknown scheme {scheme!r} (expected {FORMS})")

@@ -164,7 +164,7 @@ def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], No
     uri = parse_target(options.target)   # a bad URI is the user's mistake: say so before searching
     if options.profile is not None:
         if uri.in_process:
-            raise UsageError(f"--profile applies to udp:/udpin: targets; {options.target} is held to "
+            raise UsageError(f"--profile applies to external (udp:, tcp:, serial: ...) targets; {options.target} is held to "
                              "its own profile")
         from mavconform.reference_impl.profiles import load_profile
         load_profile(options.profile)    # a bad name or file: say so before searching

@@ -19,7 +19,10 @@ copy is kept only when it differs from its `tx`: a duplicate or a corrupted one)
 
 Two adapters move its datagrams:
 - `UdpProxy`: on a `UdpDriver`, the listen socket plus one socket per leg, opened when a
-  GCS first speaks (the driver may host the GCS and the vehicle too).
+  GCS first speaks (the driver may host the GCS and the vehicle too). Either side may be a
+  stream link instead (TCP, a serial line: `mavconform proxy --listen tcpin:5760 --forward
+  serial:/dev/ttyACM0`): a stream has one peer, so a stream listen serves one GCS, and a
+  stream forward is one connection, one leg (`max_legs` 1).
 - `ProxyNode`: one `DatagramNode` at one address, for `SimNetwork` (whose loop steps one
   node at a time, so a datagram must leave the node that received it): one leg, and the
   vehicle's replies go to the GCS that spoke last.
@@ -37,7 +40,8 @@ from mavconform.reference_impl.net.capture import address_label
 from mavconform.reference_impl.net.faults import FaultModel, LinkStats
 from mavconform.reference_impl.net.node import Address
 from mavconform.reference_impl.net.sim import CaptureHook, CaptureRecord, stable_seed
-from mavconform.reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.net.links import attach, open_stream
+from mavconform.reference_impl.net.uri import LinkUri, UdpUri, local_bind_for
 
 UP, DOWN = "up", "down"          # gcs -> vehicle, vehicle -> gcs
 FRONT = -1                       # the listen port; legs are numbered 0..max_legs-1
@@ -218,14 +222,24 @@ class UdpProxy:
     on the interface that reaches the vehicle) whenever a new GCS needs one."""
 
     def __init__(self, driver: Any, proxy: ChaosProxy, *,
-                 listen: tuple[str, int] = ("127.0.0.1", 0)) -> None:
+                 listen: tuple[str, int] | LinkUri = ("127.0.0.1", 0),
+                 forward_link: LinkUri | None = None) -> None:
+        """`listen`: an address to bind, or any link address (a stream serves one GCS);
+        `forward_link`: a tcp: or serial: vehicle, reached over a stream (one leg)."""
         self.driver, self.proxy = driver, proxy
         forward = proxy.forward
         self.leg_host = local_bind_for(forward[0]) if isinstance(forward, tuple) else "127.0.0.1"
-        self.leg_addresses: list[tuple[str, int]] = []
+        self.forward_link = None if isinstance(forward_link, UdpUri) else forward_link
+        if self.forward_link is not None and proxy.max_legs != 1:
+            raise ValueError("a stream forward is one connection: its ChaosProxy needs max_legs=1")
+        self.leg_addresses: list[Any] = []
         self.events: deque[str] = deque(maxlen=MAX_EVENTS)   # for the CLI to print
         self._reassigned_seen = 0
-        self.address: tuple[str, int] = driver.add_node(_Port(self, FRONT), bind=listen)
+        self.front = _Port(self, FRONT)
+        if isinstance(listen, tuple):
+            self.address: Any = driver.add_node(self.front, bind=listen)
+        else:
+            _, self.address = attach(driver, self.front, listen, listen=True)
 
     def open_legs(self) -> None:
         """Bind a socket for every leg the proxy handed out that has none yet."""
@@ -233,7 +247,12 @@ class UdpProxy:
         seen = proxy.reassigned
         while len(self.leg_addresses) < proxy.legs_in_use:
             leg = len(self.leg_addresses)
-            address = self.driver.add_node(_Port(self, leg), bind=(self.leg_host, 0))
+            if self.forward_link is not None:
+                link = open_stream(self.forward_link, self.driver.clock.now())
+                self.driver.add_stream(_Port(self, leg), link)
+                address = link.local
+            else:
+                address = self.driver.add_node(_Port(self, leg), bind=(self.leg_host, 0))
             self.leg_addresses.append(address)
             self.events.append(f"GCS {address_label(proxy.gcs_of(leg))} speaks to the vehicle "
                                f"from {address_label(address)}")

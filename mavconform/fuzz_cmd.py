@@ -104,7 +104,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="Hypothesis example database shared by campaigns: a directory (default "
                         ".hypothesis/fuzz), 'none', or a Redis server for a fleet (needs hypothesis[redis])")
     p.add_argument("--profile", metavar="NAME|FILE",
-                   help="udp:/udpin: targets: the vehicle profile whose rules the oracles apply (home in "
+                   help="external targets (udp:, tcp:, serial: ...): the vehicle profile whose rules the oracles apply (home in "
                         "slot 0, compact storage, non-atomic upload, retries); default: from the "
                         "HEARTBEAT autopilot (px4, ardupilot), else spec")
     p.add_argument("--restart-cmd", metavar="CMD",
@@ -116,7 +116,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--operator-control", dest="handover", action="store_true",
                    help="protocol mode: fuzz operator control too (requests, releases, takeovers, GCS "
                         "loss; never two owners, nothing from a non-owner executed, ...). builtin: and "
-                        "mutant: vehicles are built as their own system manager; a udp:/udpin: target "
+                        "mutant: vehicles are built as their own system manager; an external target "
                         "must already send CONTROL_STATUS (else a usage error, exit 2)")
     p.add_argument("--replay", metavar="CASE.json",
                    help="run one saved case again (target and mode come from the case)")

@@ -1,4 +1,4 @@
-"""`mavconform gcs ...`: drive a target vehicle with the reference GCS over UDP."""
+"""`mavconform gcs ...`: drive a target vehicle with the reference GCS over UDP, TCP or a serial line."""
 
 from __future__ import annotations
 
@@ -17,9 +17,10 @@ from mavconform.reference_impl.mission.adaptations import NAMED
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.mission.plan_upload import previous_plans, upload_plan
 from mavconform.reference_impl.mission.results import OperationResult
-from mavconform.reference_impl.net.uri import FORMS, local_bind_for
+from mavconform.reference_impl.net.links import attach
+from mavconform.reference_impl.net.uri import FORMS, LinkUri, parse_link_uri
 from mavconform.reference_impl.mission.timing import Timings
-from mavconform.reference_impl.net import MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
+from mavconform.reference_impl.net import MonotonicClock, UdpDriver
 from mavconform.reference_impl.session import GcsSession, TargetUnresponsive
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.wire.signing import SigningKey, secret_from_hex, secret_from_passphrase
@@ -31,6 +32,9 @@ Drive a vehicle's Mission Protocol with the reference GCS. The target is a URI:
   udp:HOST:PORT      the vehicle listens there (our reference vehicle, a SITL with a UDP server)
   udpin:[HOST:]PORT  we listen there (default host 127.0.0.1) and the vehicle sends to us
                      first (as PX4/ArduPilot SITL do)
+  tcp:HOST:PORT      the vehicle serves TCP there (ArduPilot SITL's 5760, INAV's 5762)
+  tcpin:[HOST:]PORT  we listen for the vehicle's TCP connection
+  serial:DEVICE[:BAUD]  a flight controller on a serial port (default 57600 baud)
 The vehicle is found by its HEARTBEAT, whose autopilot field also picks how the GCS adapts
 to it (ArduPilot: home at seq 0, non-terminating NACKs, ...; PX4: ...; anything else: the
 spec-exact GCS); --adapt fixes the choice. The adaptations that acted are printed at the end.
@@ -102,7 +106,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    target = parse_udp_uri(args.target, option="--target")
+    target = parse_link_uri(args.target, option="--target")
     if args.operation == "control":
         return _control(args, target)
     # bad files and paths fail before any network I/O
@@ -149,7 +153,7 @@ def _operate(args: argparse.Namespace, session: GcsSession, plan: Plan | None) -
     return [session.set_current(args.seq, via_command=args.command)]
 
 
-def _found(session: GcsSession, target: UdpUri, timeout: float) -> bool:
+def _found(session: GcsSession, target: LinkUri, timeout: float) -> bool:
     """Wait for the target's HEARTBEAT and say who answered, or say that no one did."""
     try:
         session.wait_for_target(timeout)
@@ -162,19 +166,19 @@ def _found(session: GcsSession, target: UdpUri, timeout: float) -> bool:
 
 
 @contextlib.contextmanager
-def _session(args: argparse.Namespace, target: UdpUri, **node: Any) -> Iterator[GcsSession]:
-    """A GCS on UDP for `target`; `node`: GcsNode keywords (`control_policy`)."""
+def _session(args: argparse.Namespace, target: LinkUri, **node: Any) -> Iterator[GcsSession]:
+    """A GCS on `target`'s link; `node`: GcsNode keywords (`control_policy`)."""
     clock = MonotonicClock()
     timings = Timings().scaled(args.time_scale)
     config = GcsConfig(system=args.system, timings=timings, download_int=not args.float,
                        adaptations=None if args.adapt == "auto" else NAMED[args.adapt],
                        control=_client_config(args) if args.operation == "control" else None,
                        signing=_signing(args))
-    remote = target.address if target.mode == "udp" else None
-    gcs = GcsNode(config, remote=remote, wall_clock=clock.wall, **node)
-    bind = target.address if target.mode == "udpin" else (local_bind_for(target.host), 0)
+    gcs = GcsNode(config, wall_clock=clock.wall, **node)
     with UdpDriver(clock=clock) as driver:
-        driver.add_node(gcs, bind=bind)   # bind first: a bad address leaves no capture file
+        remote, _ = attach(driver, gcs, target)   # first: a bad address leaves no capture file
+        if remote is not None:   # udpin: the vehicle is learnt from its first datagram
+            gcs.endpoint.add_address(remote)
         with capture_to(driver, args.capture):
             yield GcsSession(driver, gcs)
 
@@ -256,7 +260,7 @@ def _client_config(args: argparse.Namespace) -> ClientConfig:
     return ClientConfig(ack_timeout=base.ack_timeout * args.time_scale, request_timeout=args.timeout)
 
 
-def _control(args: argparse.Namespace, target: UdpUri) -> int:
+def _control(args: argparse.Namespace, target: LinkUri) -> int:
     with _session(args, target, control_policy=always(ANSWERS[args.answer])) as session:
         if not _found(session, target, args.heartbeat_timeout):
             return 1

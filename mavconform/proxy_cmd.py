@@ -1,4 +1,4 @@
-"""`mavconform proxy`: a chaos proxy between a real GCS and a real vehicle, over UDP."""
+"""`mavconform proxy`: a chaos proxy between a real GCS and a real vehicle, over UDP, TCP or serial."""
 
 from __future__ import annotations
 
@@ -9,8 +9,9 @@ import sys
 
 from mavconform.fuzz.proxy import DOWN, MAX_LEGS, UP, ChaosProxy, UdpProxy
 from mavconform.reference_impl.errors import UsageError
-from mavconform.reference_impl.net import LinkStats, MonotonicClock, UdpDriver, UdpUri, parse_udp_uri
-from mavconform.reference_impl.net.uri import FORMS
+from mavconform.reference_impl.net import LinkStats, MonotonicClock, UdpDriver, UdpUri
+from mavconform.reference_impl.net.links import stream_peer
+from mavconform.reference_impl.net.uri import LISTEN_FORMS, PEER_FORMS, parse_link_uri
 
 from .options import add_fault_options, capture_to, describe_faults, fault_model, positive, sigterm_as_interrupt
 
@@ -21,6 +22,10 @@ several GCSs can share the vehicle and each gets its own replies), and sends the
 replies back to that GCS from the listen port. Every datagram, both ways, goes through the
 link faults below and, with --capture, into an MCAP file (each frame once, one channel per
 direction per GCS, frames the faults dropped on '... (lost)').
+Either side may be a TCP connection or a serial line instead (--listen tcpin:PORT,
+serial:DEV or pty; --forward tcp:HOST:PORT or serial:DEV): a stream carries one peer, so a
+stream --listen serves one GCS and a stream --forward is one connection (one GCS at a
+time; a new GCS takes it over). Frames are cut from a stream and faulted one by one.
 Runs until Ctrl-C (or SIGTERM) or --duration, then prints per-direction counts. Exit 0, or 2 for a
 usage mistake.
 """
@@ -41,6 +46,8 @@ examples:
   mavconform gcs upload --target udp:127.0.0.1:14551 my.plan
   mavconform proxy --listen udp:127.0.0.1:0 --forward udp:127.0.0.1:14550 \\
       --only down --drop 'MISSION_ACK#1' --duration 30
+  mavconform proxy --listen udp:127.0.0.1:14551 --forward tcp:127.0.0.1:5760 --loss 0.05
+      # a UDP GCS to ArduPilot SITL's TCP port, through a lossy link
 """
 
 
@@ -49,10 +56,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=DESCRIPTION, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--listen", required=True, metavar="URI",
-                   help=f"where GCSs send to: {FORMS} (either scheme: the proxy listens; "
-                        "port 0: any free port, printed)")
+                   help=f"where GCSs send to: udp:HOST:PORT, {LISTEN_FORMS} (udp: and udpin: both "
+                        "listen; port 0: any free port, printed)")
     p.add_argument("--forward", required=True, metavar="URI",
-                   help="the vehicle, listening at udp:HOST:PORT (the proxy sends first, so not udpin:)")
+                   help=f"the vehicle: {PEER_FORMS} (the proxy sends first, so not udpin:)")
     p.add_argument("--only", choices=(UP, DOWN),
                    help="faults on one direction only: up (GCS -> vehicle) or down (vehicle -> GCS)")
     p.add_argument("--max-gcs", type=_max_gcs, default=MAX_LEGS, metavar="N",
@@ -69,18 +76,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    listen = parse_udp_uri(args.listen, role="listen", option="--listen")
-    forward = _vehicle_address(parse_udp_uri(args.forward, role="peer", option="--forward"))
+    listen = parse_link_uri(args.listen, role="listen", option="--listen")
+    forward_uri = parse_link_uri(args.forward, role="peer", option="--forward")
+    if isinstance(forward_uri, UdpUri):
+        forward: object = _vehicle_address(forward_uri)
+        legs = args.max_gcs
+    else:
+        forward, legs = stream_peer(forward_uri), 1
     faults = fault_model(args)
     up = faults if args.only in (None, UP) else None
     down = (faults.copy() if faults is not None else None) if args.only in (None, DOWN) else None
-    proxy = ChaosProxy(forward, up=up, down=down, seed=args.seed, max_legs=args.max_gcs)
+    proxy = ChaosProxy(forward, up=up, down=down, seed=args.seed, max_legs=legs)
     clock = MonotonicClock()
-    if listen.port == forward[1] and _same_host(listen.host, forward[0]):
+    if _same_place(listen, forward_uri, forward):
         raise UsageError(f"--forward {args.forward!r} is the proxy's own --listen address")
     with UdpDriver(clock=clock, seed=args.seed) as driver:
         try:
-            node = UdpProxy(driver, proxy, listen=listen.address)
+            node = UdpProxy(driver, proxy, listen=listen.address if isinstance(listen, UdpUri) else listen,
+                            forward_link=forward_uri)
         except UsageError as exc:
             raise UsageError(f"--listen: {exc}") from None
         where = "both directions" if args.only is None else f"{args.only}link only"
@@ -88,8 +101,10 @@ def run(args: argparse.Namespace) -> int:
             # Signals are caught before the listening line, so one sent on seeing it stops cleanly.
             try:
                 with sigterm_as_interrupt():
-                    print(f"chaos proxy listening on udp:{_host(node.address[0])}:{node.address[1]}, "
-                          f"forwarding to udp:{_host(forward[0])}:{forward[1]} "
+                    stream = driver.stream_of(node_front(node))
+                    here = stream.uri if stream is not None else f"udp:{_host(node.address[0])}:{node.address[1]}"
+                    there = f"udp:{_host(forward[0])}:{forward[1]}" if isinstance(forward, tuple) else str(forward_uri)
+                    print(f"chaos proxy listening on {here}, forwarding to {there} "
                           f"(faults, {where}: {describe_faults(args)})", flush=True)
                     _serve(driver, node, clock, args)
             except KeyboardInterrupt:
@@ -157,6 +172,19 @@ def _resolve(uri: UdpUri) -> str:
         if infos:
             return str(infos[0][4][0]).split("%")[0]
     raise UsageError(f"--forward: cannot resolve host {uri.host!r}: {last}")
+
+
+def node_front(node: UdpProxy) -> object:
+    """The proxy's listening node (for the driver's `stream_of`)."""
+    return node.front
+
+
+def _same_place(listen: object, forward_uri: object, forward: object) -> bool:
+    """Would the proxy forward to itself? (UDP: the same host and port; a serial line: the same device)."""
+    if isinstance(listen, UdpUri) and isinstance(forward, tuple):
+        return listen.port == forward[1] and _same_host(listen.host, forward[0])
+    device = getattr(listen, "device", None)
+    return device is not None and device == getattr(forward_uri, "device", None)
 
 
 def _same_host(host: str, ip: str) -> bool:

@@ -169,7 +169,7 @@ def _printer():
 
 def _summary(doc: dict[str, Any], report_dir: str) -> None:
     from mavconform.reports.run_document import run_facts
-    from mavconform.reports.text import dropped_text, flight_endings, safety_alarm
+    from mavconform.reports.text import dropped_text, flight_endings, link_text, safety_alarm
     s = doc["summary"]
     ident, timing = doc["identity"], run_facts(doc)
     where = f" at {timing['address']}" if timing["address"] else ""
@@ -185,6 +185,9 @@ def _summary(doc: dict[str, Any], report_dir: str) -> None:
               + (f": {', '.join(gating['regressions'])}" if gating["regressions"] else "")
               + (f"; fixed since: {', '.join(gating['fixed'])}" if gating["fixed"] else ""))
     print(f"restore: {doc['restore']['status']}: {doc['restore']['detail']}")
+    link = link_text(doc)
+    if link is not None:
+        print(f"link: {link}")
     dropped = dropped_text(doc)
     if dropped is not None:
         print(f"our receive queues: {dropped}")

@@ -1,4 +1,4 @@
-"""`mavconform vehicle`: serve the reference vehicle over UDP for any GCS."""
+"""`mavconform vehicle`: serve the reference vehicle over UDP, TCP or a serial line for any GCS."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ from mavconform.reference_impl.handover.authenticity import Roster, load_roster
 from mavconform.reference_impl.handover.control_manager import ManagerConfig
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.net import MonotonicClock, UdpDriver, parse_udp_uri
-from mavconform.reference_impl.net.uri import FORMS
+from mavconform.reference_impl.net.links import attach
+from mavconform.reference_impl.net.uri import LISTEN_FORMS, UdpUri, parse_link_uri
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 from mavconform.reference_impl.vehicle import VehicleNode
 
@@ -21,7 +22,8 @@ from .options import (add_fault_options, capture_to, describe_faults, fault_mode
                       seconds_up_to, seq_number, sigterm_as_interrupt)
 
 DESCRIPTION = """\
-Serve the reference vehicle on UDP until interrupted (or --duration): spec-exact by
+Serve the reference vehicle on UDP, TCP or a serial line (or a pseudo-terminal it makes)
+until interrupted (or --duration): spec-exact by
 default, or PX4-like / ArduPilot-like / your own with --profile (`mavconform profiles`
 lists what each changes, with the VARIANTS.md row and source of every knob).
 It sends HEARTBEAT at 1 Hz, serves mission / geofence / rally upload, download, clear and
@@ -42,6 +44,10 @@ EPILOG = """\
 examples:
   mavconform vehicle --listen udp:127.0.0.1:14550
   mavconform vehicle --listen udpin:14550              # the same (udpin:PORT is on 127.0.0.1)
+  mavconform vehicle --listen tcpin:5760               # one TCP GCS at a time, as ArduPilot SITL serves
+  mavconform vehicle --listen serial:/dev/ttyUSB0:57600  # a GCS on a serial line (a radio, a USB cable)
+  mavconform vehicle --listen pty:57600                # a new pseudo-terminal, paced at 57600 baud: a GCS
+      # (or `mavconform run --target serial:/dev/pts/N:57600`) opens the device it prints
   mavconform vehicle --profile ardupilot               # home at seq 0, non-atomic upload, ...
   mavconform vehicle --profile my-fork.toml            # base = "px4" plus your overrides
   mavconform vehicle --listen udp:127.0.0.1:0 --loss 0.1 --reorder 0.05 --seed 7
@@ -56,14 +62,15 @@ examples:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("vehicle", help="serve the reference vehicle over UDP",
+    p = sub.add_parser("vehicle", help="serve the reference vehicle over UDP, TCP or a serial line",
                        description=DESCRIPTION, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--listen", default="udp:127.0.0.1:14550", metavar="URI",
-                   help=f"where to listen: {FORMS} (either scheme: the vehicle listens; "
-                        "port 0: any free port; default %(default)s)")
+                   help=f"where to listen: udp:HOST:PORT, {LISTEN_FORMS} (udp: and udpin: both "
+                        "listen; port 0: any free port; a serial line is paced at its baud rate; "
+                        "default %(default)s)")
     p.add_argument("--connect", metavar="URI",
-                   help="also send to a GCS that listens at udp:HOST:PORT (as SITL does)")
+                   help="also send to a GCS that listens at udp:HOST:PORT (as SITL does; with a UDP --listen)")
     p.add_argument("--profile", default="spec", metavar="NAME|FILE",
                    help=f"vehicle profile: {', '.join(BUILTIN_PROFILES)} or a profile TOML file "
                         "(default %(default)s)")
@@ -113,8 +120,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    listen = parse_udp_uri(args.listen, role="listen", option="--listen")
+    listen = parse_link_uri(args.listen, role="listen", option="--listen")
     connect = parse_udp_uri(args.connect, role="peer", option="--connect") if args.connect else None
+    if connect is not None and not isinstance(listen, UdpUri):
+        raise UsageError("--connect adds a UDP peer to a UDP --listen; a TCP or serial link has one peer")
     scenario = handover_cmd.vehicle_scenario(args) if args.handover else None
     profile = load_profile(args.profile)
     behaviour = profile.behaviour
@@ -135,12 +144,16 @@ def run(args: argparse.Namespace) -> int:
     if scenario is not None:
         handover_cmd.preload_flight(vehicle, scenario)
     with UdpDriver(clock=clock, seed=args.seed) as driver:
-        address = driver.add_node(vehicle, bind=listen.address, outgoing=faults, incoming=faults)
+        peer, address = attach(driver, vehicle, listen, listen=True, outgoing=faults, incoming=faults)
+        if peer is not None:   # a stream's one peer: heard from or not, it gets HEARTBEATs
+            vehicle.endpoint.add_address(peer)
         if connect is not None:
             vehicle.endpoint.add_address(connect.address)
+        stream = driver.stream_of(vehicle)
+        where = f"udp:{address[0]}:{address[1]}" if stream is None else stream.uri
         with capture_to(driver, args.capture):   # after the bind: a bad address leaves no file
             print(f"reference vehicle {args.system}/{args.component} (profile {profile.name}) listening on "
-                  f"udp:{address[0]}:{address[1]} (faults: {describe_faults(args)})", flush=True)
+                  f"{where} (faults: {describe_faults(args)})", flush=True)
             if config.control is not None and not args.quiet:
                 unowned = "any GCS may" if config.control.open_when_unowned else "no GCS may"
                 print(f"operator control on: until a GCS takes control {unowned} change the plans; "

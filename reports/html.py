@@ -23,9 +23,8 @@ from mavconform.reports import run_document as rd
 from mavconform.reports.deciding import deciding_event, recorded_event
 from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
-from mavconform.reports.text import (clean, dropped_text, flight_endings, identity_text, interruption, one_line,
-                                     safety_alarm,
-                                     seconds, value_text, verdict_headline)
+from mavconform.reports.text import (clean, dropped_text, flight_endings, identity_text, interruption, link_text,
+                                     one_line, safety_alarm, seconds, value_text, verdict_headline)
 
 OUTCOME_COLOURS = {"pass": "#1a7f37", "fail": "#cf222e", "known-deviation": "#9a6700",
                    "not-applicable": "#6e7781", "skipped": "#57606a", "error": "#8250df"}
@@ -196,7 +195,7 @@ _RUN_LABELS = {"seed": "seed", "time_scale": "time scale", "strict": "strict",
                "clauses": "clauses selected", "expectations": "expectations file",
                "baseline": "baseline"}
 _SHOWN_APART = {"target", "started", "duration_s", "forced_wait_s", "interrupted",
-                "interrupted_at", "interrupted_by"}
+                "interrupted_at", "interrupted_by", "link"}
 
 
 def _fact_rows(doc: dict[str, Any]) -> list[tuple[str, str]]:
@@ -215,6 +214,8 @@ def _fact_rows(doc: dict[str, Any]) -> list[tuple[str, str]]:
         facts.append(("duration", seconds(volatile["duration_s"])))
     if volatile.get("forced_wait_s") is not None:
         facts.append(("forced waits", seconds(volatile["forced_wait_s"])))
+    if link_text(doc) is not None:
+        facts.append(("link", link_text(doc)))
     if dropped_text(doc) is not None:
         facts.append(("our receive queues", dropped_text(doc)))
     for line in flight_endings(doc):

@@ -102,8 +102,9 @@ def _properties(doc: dict[str, Any]) -> list[tuple[str, str]]:
              ("gating_failures", str(doc["summary"]["gating_failures"]))]
     for section in ("run", "identity"):
         for key, value in sorted((doc[section] or {}).items()):
-            pairs.append((f"{section}.{key}", value if isinstance(value, str)
-                          else value_text(value)))
+            for name, item in (sorted(value.items()) if isinstance(value, dict) else [("", value)]):
+                pairs.append((f"{section}.{key}" + (f".{name}" if name else ""),
+                              item if isinstance(item, str) else value_text(item)))
     for key, value in sorted(run_facts(doc).items()):
         if value is not None:
             pairs.append((f"volatile.{key}", value if isinstance(value, str) else value_text(value)))

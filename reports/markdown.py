@@ -14,9 +14,8 @@ from urllib.parse import quote
 
 from mavconform.reports.run_document import (OUTCOMES, PASS, clause_detail, outcome_counts,
                                              run_facts)
-from mavconform.reports.text import (document_identity, dropped_text, flight_endings, interruption, one_line,
-                                     safety_alarm,
-                                     seconds, verdict_headline)
+from mavconform.reports.text import (document_identity, dropped_text, flight_endings, interruption, link_text,
+                                     one_line, safety_alarm, seconds, verdict_headline)
 
 DETAIL_LIMIT = 200  # characters of detail per table cell
 
@@ -56,6 +55,9 @@ def markdown_summary(doc: dict[str, Any]) -> str:
     if restore["detail"]:
         restore_line += f" ({md(restore['detail'], DETAIL_LIMIT)})"
     out.append(restore_line + ".")
+    link = link_text(doc)
+    if link is not None:
+        out += ["", f"Link: {md(link)}."]
     dropped = dropped_text(doc)
     if dropped is not None:
         out += ["", f"Our sockets' receive queues: {md(dropped)}."]

@@ -19,7 +19,10 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
     format    "mavconform-run/2"
     tool      {name, version}
     run       {target, ...scalars: seed, time_scale, strict, ...,
-               [interrupted: bool, interrupted_at: clause id or phase, interrupted_by: SIGTERM]}
+               [interrupted: bool, interrupted_at: clause id or phase, interrupted_by: SIGTERM],
+               [link: {kind: in-process|udp|udpin|tcp|tcpin|serial, bytes_per_second (null: a
+                       network link, not limited), reply_allowance_s: what the suite added to
+                       each reply wait for the link's speed (harness/link_timing.py)}]}
     identity  {system, component, [type, autopilot, mavlink_version, ...]} or null
     summary   {total, <one count per outcome>, gating_failures, [left_armed],
                verdict: pass|fail|interrupted}
@@ -36,6 +39,11 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
     volatile  {started, duration_s, forced_wait_s (or null), address (the target's, or null),
                [identity: {KEY: {name: text}}],                  an identity text's <name>s
                                                                  (how long the target booted)
+               [link: {connections, bytes_written, bytes_read,   a stream link (tcp:, serial:):
+                       frames_dropped_link_down,                 what it carried, what was sent
+                       frames_dropped_queue_full,                while it was down, and its
+                       history: [{t, event}]}],                  connects and losses (t: s
+                                                                 from discovery's start)
                [receive_queue: {dropped, buffer_bytes}],         our sockets' kernel receive
                                  queues: datagrams they dropped before we read them (null:
                                  the platform cannot tell) and the smallest buffer granted
@@ -97,7 +105,10 @@ RUN_KNOWN = {"seed": ("integer", "null"), "time_scale": ("number",), "strict": (
              "clauses": ("string",), "expectations": ("string", "null"),
              "baseline": ("string", "null"),
              "interrupted": ("bool",), "interrupted_at": ("string", "null"),
-             "interrupted_by": ("string", "null")}
+             "interrupted_by": ("string", "null"), "link": ("object",)}
+LINK_KNOWN = {"kind": ("string",), "bytes_per_second": ("number", "null"), "reply_allowance_s": ("number",)}
+LINK_COUNTS = ("bytes_written", "bytes_read", "frames_dropped_link_down", "frames_dropped_queue_full",
+               "connections")
 IDENTITY_KNOWN = {"type": ("integer",), "autopilot": ("integer",),
                   "mavlink_version": ("integer",)}
 # optional clause keys: decided_by is an index, so stable (the events' order is)
@@ -352,6 +363,9 @@ class _Checker:
             self.moved(run, MOVED_RUN, "run")
         for key, value in run.items():
             self.value(value, f"run.{key}", known.get(key, SCALAR))
+        if isinstance(run.get("link"), dict):
+            for key, kinds in LINK_KNOWN.items():
+                self.key(run["link"], key, "run.link", *kinds)
 
     def identity(self, identity: dict | None) -> None:
         if identity is None:
@@ -426,6 +440,19 @@ class _Checker:
             for key in ("dropped", "buffer_bytes"):
                 if self.key(queue, key, "volatile.receive_queue", "integer", "null") is not None:
                     self.count(queue, key, "volatile.receive_queue")
+        if "link" in volatile:
+            link = self.value(volatile["link"], "volatile.link", ("object",))
+            for key in LINK_COUNTS:
+                if key in link:
+                    self.key(link, key, "volatile.link", "integer")
+                    self.count(link, key, "volatile.link")
+            self.optional(link, "history", "volatile.link", "array")
+            for i, event in enumerate(link.get("history") or []):
+                if not isinstance(event, dict):
+                    self.fail(f"volatile.link.history[{i}]", "expected an object")
+                    continue
+                self.key(event, "t", f"volatile.link.history[{i}]", "number")
+                self.key(event, "event", f"volatile.link.history[{i}]", "string")
         per_clause = self.key(volatile, "clauses", "volatile", "object")
         by_id = {clause["id"]: clause for clause in clauses}
         for clause_id in per_clause:

@@ -125,12 +125,38 @@ def dropped_text(doc: dict[str, Any]) -> str | None:
         return None
     dropped, granted = queue.get("dropped"), queue.get("buffer_bytes")
     if dropped is None:
-        said = "drops unknown (this platform does not count them)"
+        serial = (doc["run"].get("link") or {}).get("kind") == "serial"
+        said = "drops unknown (a serial line does not count them)" if serial else \
+            "drops unknown (this platform does not count them)"
     elif dropped == 0:
         said = "none dropped"
     else:
         said = f"{dropped} datagram{'' if dropped == 1 else 's'} dropped before we read them"
     return said + (f" (receive buffer {granted // 1024} KiB)" if granted is not None else "")
+
+
+def link_text(doc: dict[str, Any]) -> str | None:
+    """The link to the target and the timing used, for people: "serial at 5760 bytes/s:
+    each reply wait + 0.275 s; 1 connection"; None for an in-process target (or a run
+    document from before links were recorded)."""
+    link = doc["run"].get("link")
+    if not link or link.get("kind") == "in-process":
+        return None
+    rate = link.get("bytes_per_second")
+    if rate is None:
+        said = f"{link['kind']} (a network link: reply waits are the protocol's)"
+    else:
+        said = f"{link['kind']} at {rate:g} bytes/s: each reply wait + {link['reply_allowance_s']:g} s"
+    events = (doc.get("volatile") or {}).get("link")
+    if events:
+        lost = sum(1 for e in events.get("history", []) if e["event"].startswith(("closed", "read failed",
+                                                                                  "write failed")))
+        n = events.get("connections", 0)
+        said += f"; {n} connection{'' if n == 1 else 's'}" + (f", {lost} lost" if lost else "")
+        dropped = events.get("frames_dropped_link_down", 0)
+        if dropped:
+            said += f", {dropped} frame{'' if dropped == 1 else 's'} sent while it was down"
+    return said
 
 
 def flight_endings(doc: dict[str, Any]) -> list[str]:

@@ -47,7 +47,7 @@ def test_dead_target_is_a_finding_not_a_hang(capsys):
 
 
 @pytest.mark.parametrize("argv, needle", [
-    (["gcs", "upload", "--target", "tcp:127.0.0.1:5", DEMO], "unknown scheme 'tcp'"),
+    (["gcs", "upload", "--target", "http:127.0.0.1:5", DEMO], "unknown scheme 'http'"),
     (["gcs", "upload", "--target", "udp:127.0.0.1", DEMO], "missing port"),
     (["gcs", "upload", "--target", "udp:127.0.0.1:5", "/no/such.plan"], "/no/such.plan: cannot read"),
     (["vehicle", "--listen", "udp:127.0.0.1:99999"], "bad port"),

@@ -30,7 +30,7 @@ BAD = [
     (["run", "--baseline", "FILES/bad.json"], "FILES/bad.json"),
     (["fuzz", "--mode", "bits"], "fuzz: argument --mode: invalid choice: 'bits'"),
     (["fuzz", "--time", "0"], "fuzz: argument --time: bad duration '0'"),
-    (["fuzz", "--target", "tcp:127.0.0.1:5"], "unknown scheme 'tcp'"),
+    (["fuzz", "--target", "http:127.0.0.1:5"], "unknown scheme 'http'"),
     (["fuzz", "--capture", "x.mcap"], "--capture goes with --replay"),
     (["fuzz", "--replay", "FILES/missing.json"], "FILES/missing.json"),
     (["gcs"], "gcs: the following arguments are required: OPERATION"),

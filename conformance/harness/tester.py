@@ -3,7 +3,8 @@
 Every wait is bounded and ends on the event it waits for: `expect` returns the moment a
 matching frame arrives; only `expect_silence` and `collect` must sit out their whole
 window, and those windows are what the suite's forced-wait figure counts. All times a
-check passes are the protocol's own (spec defaults) and are stretched by `--time-scale`.
+check passes are the protocol's own (spec defaults) and are stretched by `--time-scale`; a
+slow link (a serial line) adds its `link_allowance` to each reply wait.
 
 Frames are matched from a floor (`mark()` moves it to "now") and a matched frame is
 consumed, so two `expect`s of the same request see the first copy and then the retry.
@@ -52,6 +53,10 @@ class Tester:
         self.node = node
         self.driver = driver
         self.scale = scale
+        # s a slow link adds to a reply (a request and its answer, behind what is queued):
+        # added to every reply wait (`expect`, `poll_for`), set by the session from the link
+        # (harness/link_timing.py); 0 on a network link
+        self.link_allowance = 0.0
         self.timings = timings
         self.target: tuple[int, int] = node.target or (0, 0)
         self.form: StoredForm = SPEC_FORM    # how the target keeps plans (set on discovery)
@@ -152,7 +157,7 @@ class Tester:
     def expect(self, match: Match, within: float | None = None) -> Frame:
         """The first unconsumed frame since the floor that matches, waiting at most `within`
         seconds (default: the spec's 1500 ms), scaled. Fails the clause if none comes."""
-        within = self.reply_timeout if within is None else within * self.scale
+        within = (self.reply_timeout if within is None else within * self.scale) + self.link_allowance
         found = self._find(match)
         if found is None:
             self.driver.run_until(self._arrival(match), timeout=within)
@@ -168,7 +173,7 @@ class Tester:
         """Like `expect`, but None (not a failure) if nothing matching arrives. `forced`:
         the wait's length is set by the target (its stream period, its item timeout), so
         it counts as forced waiting, not as the suite's own time."""
-        within *= self.scale
+        within = within * self.scale + self.link_allowance
         found = self._find(match)
         if found is None:
             started = self.now()

@@ -8,7 +8,7 @@ and are packed one to eight per datagram (program.py). What the target would acc
 plan-changing message never goes out intact (admission.py): not as our per-datagram decoder
 reads it, nor as the MAVLink C parser of PX4 (mavlink_parse_char) or ArduPilot
 (mavlink_frame_char_buffer) reads the link, a byte stream whose state carries from one
-datagram to the next (cparser.py models it; a frame completed by the next datagram, hidden
+datagram to the next (reference_impl/wire/cparser.py models it; a frame completed by the next datagram, hidden
 in an unknown-incompat frame's payload or started on the 0xFD that ended a bad frame is
 neutralised too), and every batch leaves that parser IDLE before the oracle speaks (a filler
 the model derives, sent again on replay). After each batch the oracle (rig.py) wants: no

@@ -15,7 +15,7 @@ replays are exact); the step records that it was.
 
   - our own decoder (reference_impl/wire/codec.py), one datagram at a time: the builtin
     and mutant vehicles read datagrams so;
-  - the MAVLink C parser (cparser.py), in both forms real autopilots run it
+  - the MAVLink C parser (reference_impl/wire/cparser.py), in both forms real autopilots run it
     (mavlink_parse_char: PX4, mavlink_parse_char restarting on a 0xFD that ends a bad
     frame; mavlink_frame_char_buffer: ArduPilot), as a BYTE STREAM whose state persists
     from one datagram to the next on the link. So a frame is also caught when it is
@@ -68,11 +68,11 @@ from collections import deque
 from typing import Callable, Iterable
 
 from mavconform.reference_impl.wire.codec import FrameDecoder
+from mavconform.reference_impl.wire.cparser import OK, PARSE_CHAR, VARIANTS, CParser, MessageTable, ParsedFrame
 from mavconform.reference_impl.wire.frame import Frame, SignatureVerdict
 from mavconform.reference_impl.wire.signing import SigningKey
 
 from . import wire
-from .cparser import OK, PARSE_CHAR, VARIANTS, CParser, MessageTable, ParsedFrame
 
 INERT: frozenset[str] = frozenset({
     "HEARTBEAT", "MISSION_ACK", "MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ITEM",

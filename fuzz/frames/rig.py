@@ -12,7 +12,7 @@ hears both).
 
 The link, as the target's parser reads it: the fuzz datagrams and the oracle's own leave
 one socket, so they are one byte stream to a target that parses as the MAVLink C library
-does (admission.py, cparser.py). The station keeps the admission rule's stream model in
+does (admission.py, reference_impl/wire/cparser.py). The station keeps the admission rule's stream model in
 step with it: every datagram that leaves for the target is fed to it in the order it is
 sent (`Admission.observe`), the oracle's frames are held back while a batch is being sent
 (`Rig.send` .. the end of `Rig.flush`), and before the oracle speaks after fuzz bytes that
@@ -53,7 +53,7 @@ from mavconform.reference_impl.net.guard import GuardedNode
 from mavconform.reference_impl.net.node import Address
 from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
 from mavconform.reference_impl.net.udp import UdpDriver
-from mavconform.reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.net.links import attach
 from mavconform.reference_impl.session import GcsSession
 from mavconform.reference_impl.vehicle import VehicleNode
 from mavconform.reference_impl.wire.signing import SigningKey
@@ -219,13 +219,12 @@ class Rig:
                     here = self.driver.add_node(self.station)
                     self.vehicle.endpoint.add_address(here)
                     self.gcs.endpoint.add_address(where)
-                elif uri.kind == "udp":
-                    self.station = _Station(self.gcs, uri.udp.address)
-                    self.driver.add_node(self.station, bind=(local_bind_for(uri.udp.host), 0))
-                    self.gcs.endpoint.add_address(uri.udp.address)
                 else:   # udpin: the target sends first; its address is learned
                     self.station = _Station(self.gcs, None)
-                    self.driver.add_node(self.station, bind=uri.udp.address)
+                    peer, _ = attach(self.driver, self.station, uri.link)
+                    if peer is not None:
+                        self.station.target_address = peer
+                        self.gcs.endpoint.add_address(peer)
             except BaseException:
                 self.driver.close()
                 raise

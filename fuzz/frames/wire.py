@@ -21,8 +21,9 @@ from typing import Any
 from mavconform.reference_impl.wire.codec import (IFLAG_SIGNED, MAGIC_V1, MAGIC_V2, SIGNATURE_LEN,
                                        base_payload_length, default_dialect)
 
+from mavconform.reference_impl.wire.checksum import crc16
+
 _DIALECT = default_dialect()
-_X25 = _DIALECT.x25crc
 _MSG_BY_ID: dict[int, Any] = _DIALECT.mavlink_map
 
 
@@ -48,24 +49,6 @@ def crc_offset(frame: bytes) -> int:
 def crc_extra(mid: int) -> int:
     cls = _MSG_BY_ID.get(mid)
     return cls.crc_extra if cls is not None else 0
-
-
-_CRC_CACHE: dict[tuple[bytes, int], int] = {}
-
-
-def crc16(body: bytes, extra: int) -> int:
-    """X.25 over `body` (len .. end of payload) then CRC_EXTRA, by the dialect's x25crc;
-    cached, since fuzz frames and the parser model's re-reads repeat the same bodies."""
-    key = (body, extra)
-    crc = _CRC_CACHE.get(key)
-    if crc is None:
-        x = _X25(body)
-        x.accumulate(bytes((extra,)))
-        crc = x.crc
-        if len(_CRC_CACHE) > 50_000:
-            _CRC_CACHE.clear()
-        _CRC_CACHE[key] = crc
-    return crc
 
 
 def checksum(body: bytes, extra: int) -> bytes:

@@ -24,7 +24,7 @@ from mavconform.reference_impl.net import FaultModel, UdpDriver
 from mavconform.reference_impl.net.node import Address
 from mavconform.reference_impl.net.shared_link import SharedLink
 from mavconform.reference_impl.net.sim import CaptureHook
-from mavconform.reference_impl.net.uri import local_bind_for
+from mavconform.reference_impl.net.links import attach
 
 from ..outcomes import TargetUnresponsive
 from .faults import install
@@ -84,7 +84,7 @@ class Watch:
 
 
 class TargetConnection:
-    """The campaign's socket to `uri` (udp: or udpin:), opened and the target found.
+    """The campaign's link to `uri` (udp:, udpin:, tcp:, tcpin:, serial:), opened and the target found.
 
     `up` and `down` are GCS A's link faults (what leaves the socket, what reaches it): the
     same objects for the life of the connection, changed in place by each example."""
@@ -99,13 +99,11 @@ class TargetConnection:
         self.watch = Watch(wall_clock=self.driver.clock.wall)
         self.link = SharedLink(self.watch)
         try:
-            udp = uri.udp
             if capture is not None:
                 self.driver.add_capture(capture)
-            bind = (local_bind_for(udp.host), 0) if uri.kind == "udp" else udp.address
-            self.driver.add_node(self.link, bind=bind, outgoing=self.up, incoming=self.down)
-            if uri.kind == "udp":
-                self.watch.endpoint.add_address(udp.address)
+            peer, _ = attach(self.driver, self.link, uri.link, outgoing=self.up, incoming=self.down)
+            if peer is not None:   # udpin: learnt from the target's first datagram
+                self.watch.endpoint.add_address(peer)
             if not self.driver.run_until(lambda: self.watch.target is not None, timeout=discovery_timeout):
                 raise TargetUnresponsive(f"no HEARTBEAT from {uri} within {discovery_timeout:g} s "
                                          "(is it running, and is the address right?)")

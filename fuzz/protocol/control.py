@@ -13,7 +13,7 @@ judges, chosen by transport:
   that made it, against the frames that came in during that call: a change with no cause in
   that call (a request, a release, a write from the GCS allowed to make it) had no cause.
   Times are the vehicle's own (virtual), so the bounds are exact.
-- `WireControl` (udp:/udpin: targets): only what the wire shows. Which GCSs may own control
+- `WireControl` (external targets: udp:, tcp:, serial:): only what the wire shows. Which GCSs may own control
   follows from the answers our GCSs got (ACCEPTED to a request: that GCS; to a release:
   nobody; an unanswered one: either), widened wherever the target could have dropped a silent
   owner; after every step the probe waits (bounded, on a clean link) for a CONTROL_STATUS,

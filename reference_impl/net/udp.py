@@ -1,4 +1,5 @@
-"""UdpDriver: the same `DatagramNode`s over real UDP sockets, one thread, `selectors`.
+"""UdpDriver: the same `DatagramNode`s over real UDP sockets (and byte-stream links: TCP,
+serial), one thread, `selectors`.
 
 The only real wait in the project lives here: `selector.select(timeout)`, always bounded by
 the run's end and the earliest node deadline or fault timer, so a silent peer costs exactly
@@ -12,6 +13,12 @@ What the kernel drops before we read it is ours, not the peer's: each socket get
 receive buffer and, where the platform can count them, its drops (receive_queue.py);
 `receive_queue(node)` says both. Every wake-up reads what is waiting on each ready socket
 (bounded), so a busy peer is read as it sends.
+
+A stream link (`add_stream`: stream_link.py, tcp_link.py, serial_link.py) carries the same
+nodes: its bytes are cut into frames (stream_framer.py) and each frame goes to the node as
+a datagram from the link's one peer; what the node sends goes down the stream, through the
+same fault models, frame by frame. Nothing is lost on a TCP link, so its receive queue's
+drop count is a known 0; a serial line's is unknown.
 
 Fault RNGs are seeded from (seed, node index, direction), not the OS-chosen port, so the
 fault *decisions* repeat for a given seed even though real timing does not.
@@ -33,6 +40,8 @@ from .faults import FaultModel, LinkStats
 from .node import Address, DatagramNode
 from .receive_queue import ANCILLARY_SPACE, ReceiveQueue, open_queue, resize
 from .sim import CaptureHook, CaptureRecord, stable_seed
+from .stream_framer import StreamFramer
+from .stream_link import StreamLink
 
 MAX_DATAGRAM = 65535
 MAX_DRAIN = 256  # datagrams read from one socket per wake-up, so one flood can't starve the rest
@@ -51,6 +60,22 @@ class _Endpoint:
         self.queue = queue
 
 
+class _StreamEndpoint:
+    """A node on a stream link: the link, its framer, and the same fault plumbing."""
+
+    __slots__ = ("node", "link", "address", "outgoing", "incoming", "rng_out", "rng_in", "queue",
+                 "framer", "generation")
+
+    def __init__(self, node: DatagramNode, link: StreamLink, outgoing: FaultModel | None,
+                 incoming: FaultModel | None, rng_out: random.Random, rng_in: random.Random) -> None:
+        self.node, self.link, self.address = node, link, link.local
+        self.outgoing, self.incoming = outgoing, incoming
+        self.rng_out, self.rng_in = rng_out, rng_in
+        self.queue = ReceiveQueue(None, counted=link.kind in ("tcp", "tcpin"))
+        self.framer = StreamFramer()
+        self.generation = link.generation
+
+
 class UdpDriver:
     """Runs nodes on UDP sockets in real time. Use as a context manager, or call close()."""
 
@@ -61,6 +86,9 @@ class UdpDriver:
         self.recv_errors = 0
         self._selector = selectors.DefaultSelector()
         self._endpoints: list[_Endpoint] = []
+        self._streams: list[_StreamEndpoint] = []
+        self._nodes: list[_Endpoint | _StreamEndpoint] = []   # both kinds, in the order added
+        self._registered: dict[int, tuple[_StreamEndpoint, object, int, int]] = {}
         self._timers: list[tuple[float, int, int, _Endpoint, bytes, Address]] = []
         self._tiebreak = count()
         self._hooks: list[CaptureHook] = []
@@ -91,8 +119,27 @@ class UdpDriver:
                        random.Random(stable_seed(self.seed, index, "out")),
                        random.Random(stable_seed(self.seed, index, "in")), queue)
         self._endpoints.append(ep)
+        self._nodes.append(ep)
         self._selector.register(sock, selectors.EVENT_READ, ep)
         return address  # type: ignore[return-value]
+
+    def add_stream(self, node: DatagramNode, link: StreamLink, *, outgoing: FaultModel | None = None,
+                   incoming: FaultModel | None = None) -> None:
+        """Run `node` on a stream link (which the driver then owns and closes)."""
+        self._check_open()
+        if incoming is not None and incoming is outgoing:
+            incoming = outgoing.copy()
+        index = len(self._nodes)
+        ep = _StreamEndpoint(node, link, outgoing, incoming,
+                             random.Random(stable_seed(self.seed, index, "out")),
+                             random.Random(stable_seed(self.seed, index, "in")))
+        self._streams.append(ep)
+        self._nodes.append(ep)
+
+    def stream_of(self, node: DatagramNode) -> StreamLink | None:
+        """The stream link `node` runs on, or None if it is on a UDP socket."""
+        ep = self._endpoint(node)
+        return ep.link if isinstance(ep, _StreamEndpoint) else None
 
     def add_capture(self, hook: CaptureHook) -> None:
         self._hooks.append(hook)
@@ -102,8 +149,11 @@ class UdpDriver:
         return self._endpoint(node).queue
 
     def resize_receive_buffer(self, node: DatagramNode, wanted: int) -> int | None:
-        """Ask for a `wanted`-byte receive buffer on `node`'s socket; the size granted."""
+        """Ask for a `wanted`-byte receive buffer on `node`'s socket; the size granted
+        (None on a stream link: there is no datagram queue to size)."""
         ep = self._endpoint(node)
+        if isinstance(ep, _StreamEndpoint):
+            return None
         return resize(ep.sock, ep.queue, wanted)
 
     # -- running ------------------------------------------------------------------------
@@ -125,7 +175,8 @@ class UdpDriver:
         if condition():
             return True
         timers = self._timers
-        endpoints = self._endpoints
+        nodes = self._nodes
+        streams = self._streams
         for _ in range(max_steps):
             now = clock.now()
             busy = False
@@ -136,11 +187,15 @@ class UdpDriver:
                 else:
                     self._deliver(ep, data, peer, now)
                 busy = True
-            for ep in endpoints:
+            for ep in nodes:
                 d = ep.node.next_deadline()
                 if d is not None and d <= now:
                     ep.node.poll(now)
                     busy = True
+            for sp in streams:
+                d = sp.link.next_deadline()
+                if d is not None and d <= now:
+                    sp.link.poll(now)
             if busy:
                 self._flush(now)
                 if condition():
@@ -149,15 +204,24 @@ class UdpDriver:
             wake = end
             if timers and timers[0][0] < wake:
                 wake = timers[0][0]
-            for ep in endpoints:
+            for ep in nodes:
                 d = ep.node.next_deadline()
                 if d is not None and d < wake:
                     wake = d
+            for sp in streams:
+                d = sp.link.next_deadline()
+                if d is not None and d < wake:
+                    wake = d
+            if streams:
+                self._sync_streams(now)
             events = self._selector.select(max(0.0, wake - now))
             if events:
                 now = clock.now()
-                for key, _ in events:
-                    self._drain(key.data, now)
+                for key, mask in events:
+                    if key.data.__class__ is _Endpoint:
+                        self._drain(key.data, now)
+                    else:
+                        self._stream_ready(key.fd, mask, now)
                 self._flush(now)
                 if condition():
                     return True
@@ -172,6 +236,10 @@ class UdpDriver:
         for ep in self._endpoints:
             self._selector.unregister(ep.sock)
             ep.sock.close()
+        for fd in list(self._registered):
+            self._unregister(fd)
+        for sp in self._streams:
+            sp.link.close()
         self._selector.close()
 
     def __enter__(self) -> "UdpDriver":
@@ -186,8 +254,8 @@ class UdpDriver:
         if self._closed:
             raise ValueError("UdpDriver is closed")
 
-    def _endpoint(self, node: DatagramNode) -> _Endpoint:
-        for ep in self._endpoints:
+    def _endpoint(self, node: DatagramNode) -> _Endpoint | _StreamEndpoint:
+        for ep in self._nodes:
             if ep.node is node:
                 return ep
         raise ValueError(f"UdpDriver has no socket for {node!r}")
@@ -205,7 +273,7 @@ class UdpDriver:
 
     def _flush(self, now: float) -> None:
         """Send what every node has queued, through its outgoing faults."""
-        for ep in self._endpoints:
+        for ep in self._nodes:
             for data, dst in ep.node.take_outgoing():
                 stats = self._link(ep.address, dst)
                 stats.sent += 1
@@ -224,8 +292,14 @@ class UdpDriver:
                     else:
                         heappush(self._timers,
                                  (now + delay, next(self._tiebreak), _SEND, ep, payload, dst))
+        for sp in self._streams:
+            sp.link.flush(now)
 
-    def _sendto(self, ep: _Endpoint, data: bytes, dst: Address) -> None:
+    def _sendto(self, ep: _Endpoint | _StreamEndpoint, data: bytes, dst: Address) -> None:
+        if ep.__class__ is _StreamEndpoint:
+            if not ep.link.send(data, self.clock.now()):
+                self._link(ep.address, dst).errors += 1
+            return
         try:
             ep.sock.sendto(data, dst)  # type: ignore[arg-type]
         except OSError:
@@ -264,7 +338,60 @@ class UdpDriver:
                     heappush(self._timers,
                              (now + delay, next(self._tiebreak), _RECV, ep, payload, src))
 
-    def _deliver(self, ep: _Endpoint, data: bytes, src: Address, now: float) -> None:
+    # -- stream links -------------------------------------------------------------------
+
+    def _sync_streams(self, now: float) -> None:
+        """Wait on what each stream link wants now (it changes as links connect and drop)."""
+        wanted: dict[int, tuple[_StreamEndpoint, object, int, int]] = {}
+        for sp in self._streams:
+            for fileobj, read, write in sp.link.wanted(now):
+                fd = fileobj if isinstance(fileobj, int) else fileobj.fileno()
+                mask = (selectors.EVENT_READ if read else 0) | (selectors.EVENT_WRITE if write else 0)
+                if mask:
+                    wanted[fd] = (sp, fileobj, mask, sp.link.generation)
+        registered = self._registered
+        for fd, entry in list(registered.items()):
+            if wanted.get(fd) != entry:
+                self._unregister(fd)
+        for fd, entry in wanted.items():
+            if fd not in registered:
+                self._selector.register(fd, entry[2], entry)
+                registered[fd] = entry
+
+    def _unregister(self, fd: int) -> None:
+        self._registered.pop(fd, None)
+        try:
+            self._selector.unregister(fd)
+        except (KeyError, ValueError, OSError):
+            pass
+
+    def _stream_ready(self, fd: int, mask: int, now: float) -> None:
+        entry = self._registered.get(fd)
+        if entry is None:
+            return
+        sp, fileobj = entry[0], entry[1]
+        data = sp.link.ready(fileobj, bool(mask & selectors.EVENT_READ), bool(mask & selectors.EVENT_WRITE), now)
+        if sp.link.generation != sp.generation:   # a new connection: nothing carries over
+            sp.generation = sp.link.generation
+            sp.framer.reset()
+        if not data:
+            return
+        peer = sp.link.peer
+        fault = sp.incoming
+        for frame in sp.framer.feed(data):
+            if fault is None or fault.is_clean:
+                self._deliver(sp, frame, peer, now)
+                continue
+            copies = fault.schedule(frame, now, sp.rng_in, self._link(peer, sp.address))
+            if not copies and self._hooks:
+                self._emit(now, peer, sp.address, frame, "drop")
+            for delay, payload in copies:
+                if delay <= 0.0:
+                    self._deliver(sp, payload, peer, now)
+                else:
+                    heappush(self._timers, (now + delay, next(self._tiebreak), _RECV, sp, payload, peer))
+
+    def _deliver(self, ep: _Endpoint | _StreamEndpoint, data: bytes, src: Address, now: float) -> None:
         self._link(src, ep.address).delivered += 1
         if self._hooks:
             self._emit(now, src, ep.address, data, "rx")

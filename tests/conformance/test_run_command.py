@@ -101,7 +101,7 @@ def test_dead_target_is_reported_fast(tmp_path, capsys) -> None:
 
 
 @pytest.mark.parametrize("argv,message", [
-    (["run", "--target", "tcp:1.2.3.4:5"], "unknown scheme"),
+    (["run", "--target", "http:127.0.0.1:5"], "unknown scheme"),
     (["run", "--target", "udp:127.0.0.1:99999"], "bad port"),
     (["run", "--target", "mutant:nope"], "unknown mutant"),
     (["run", "--clauses", "MIS.NOPE.*"], "matches no vehicle clause"),

@@ -1,5 +1,5 @@
 """The admission rule against the parser real autopilots run: the MAVLink C library's byte
-stream, whose state carries from one datagram to the next (fuzz/frames/cparser.py).
+stream, whose state carries from one datagram to the next (reference_impl/wire/cparser.py).
 
 - the Python model of the C parser equals the C code itself, compiled here from pymavlink's
   generated headers for our dialect (mavgen --lang C), on Hypothesis-drawn streams of real,
@@ -33,7 +33,7 @@ from mavconform.conformance.target_uri import parse_target
 from mavconform.fuzz.case import Case
 from mavconform.fuzz.frames import replay, wire
 from mavconform.fuzz.frames.admission import INERT, TARGET_TABLE, Admission
-from mavconform.fuzz.frames.cparser import (BAD_CRC, DIALECT_TABLE, FRAME_CHAR_BUFFER, OK, PARSE_CHAR,
+from mavconform.reference_impl.wire.cparser import (BAD_CRC, DIALECT_TABLE, FRAME_CHAR_BUFFER, OK, PARSE_CHAR,
                                  VARIANTS, CParser, ParsedFrame)
 from mavconform.fuzz.frames.mutators import MUTATORS, MutationContext
 from mavconform.fuzz.frames.program import Builder, FrameSpec, programs

@@ -72,7 +72,7 @@ def test_a_replayed_case_that_no_longer_fails_exits_0(tmp_path, capsys) -> None:
     (["--capture", "x.mcap"], "--capture goes with --replay"),
     (["--replay", "missing.json"], "cannot read fuzz case"),
     (["--replay", "missing.json", "--examples", "3"], "--examples, --time, --profile and --restart-cmd do not apply"),
-    (["--target", "builtin:spec", "--profile", "px4"], "--profile applies to udp:/udpin: targets"),
+    (["--target", "builtin:spec", "--profile", "px4"], "--profile applies to external (udp:, tcp:, serial: ...) targets"),
     (["--target", "udp:127.0.0.1:9", "--profile", "no-such-profile"], "no-such-profile"),
     (["--database", "redis-ish://x"], "--database"),
     (["--database", "plain-file/db"], "cannot create the directory"),   # issue 12: not silently nothing

@@ -403,7 +403,7 @@ def test_cli_proxy_stops_cleanly_on_sigterm(tmp_path):
 
 
 @pytest.mark.parametrize("argv, says", [
-    (["--forward", "tcp:127.0.0.1:5"], "--forward: bad endpoint 'tcp:127.0.0.1:5': unknown scheme"),
+    (["--forward", "http:127.0.0.1:5"], "--forward: bad endpoint 'http:127.0.0.1:5': unknown scheme"),
     (["--forward", "udpin:127.0.0.1:5"], "--forward: bad endpoint 'udpin:127.0.0.1:5': here a peer listens"),
     (["--forward", "udp:127.0.0.1:0"], "--forward: bad endpoint 'udp:127.0.0.1:0': port 0"),
     (["--forward", "udp:127.0.0.1:70000"], "bad port 70000"),

@@ -1,5 +1,6 @@
 """A model of the MAVLink C library's receive parser: one link's byte stream, as PX4 and
-ArduPilot read it.
+ArduPilot read it. The frame fuzzer judges what a target admits by it
+(fuzz/frames/admission.py); stream links cut their frames with it (net/stream_framer.py).
 
 Our own decoder (reference_impl/wire/codec.py) splits each datagram on its own, by the
 frames' length fields. The parser real autopilots run does not: it is the byte-at-a-time
@@ -83,13 +84,13 @@ import hashlib
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, NamedTuple
 
-from mavconform.reference_impl.wire.codec import IFLAG_SIGNED
-from mavconform.reference_impl.wire.codec import MAGIC_V1 as STX_V1      # MAVLINK_STX_MAVLINK1
-from mavconform.reference_impl.wire.codec import MAGIC_V2 as STX_V2      # MAVLINK_STX
-from mavconform.reference_impl.wire.codec import SIGNATURE_LEN as SIGNATURE_BLOCK_LEN
-from mavconform.reference_impl.wire.signing import signing_timestamp
-
-from .wire import _DIALECT, crc16
+from .checksum import crc16
+from .codec import IFLAG_SIGNED
+from .codec import MAGIC_V1 as STX_V1      # MAVLINK_STX_MAVLINK1
+from .codec import MAGIC_V2 as STX_V2      # MAVLINK_STX
+from .codec import SIGNATURE_LEN as SIGNATURE_BLOCK_LEN
+from .codec import default_dialect
+from .signing import signing_timestamp
 
 MAX_SIGNING_STREAMS = 16
 SIGNING_TIMESTAMP_LIMIT = 60 * 100_000      # MAVLINK_SIGNING_TIMESTAMP_LIMIT s, in 10 us units
@@ -129,7 +130,7 @@ class MessageTable:
         return entry[0] if entry is not None else None
 
 
-DIALECT_TABLE = MessageTable.of(_DIALECT)   # our own dialect, as fuzz/frames/wire.py uses it
+DIALECT_TABLE = MessageTable.of(default_dialect())   # our own dialect, as the frame fuzzer uses it
 
 class ParsedFrame(NamedTuple):
     """A frame the parser completed (or, from `awaiting_signature`, is completing).
@@ -206,6 +207,12 @@ class CParser:
     def idle(self) -> bool:
         """In MAVLINK_PARSE_STATE_IDLE: the next byte can only start a frame."""
         return not self._buf
+
+    @property
+    def frame_start(self) -> int | None:
+        """The stream offset of the frame in progress, or None when idle (a stream framer
+        keeps the bytes from there on, reference_impl/net/stream_framer.py)."""
+        return self._start if self._buf else None
 
     @property
     def takes_any_signature(self) -> bool:
