@@ -22,7 +22,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     g = parser.getgroup("mavconform", "MAVLink mission conformance (mavconform)")
     g.addoption("--mavlink-target", metavar="URI",
                 help="run the conformance clauses against URI (builtin:PROFILE: spec, px4, ardupilot, ... "
-                     "(`mavconform profiles`); mutant:NAME, udp:HOST:PORT or udpin:[HOST:]PORT)")
+                     "(`mavconform profiles`); mutant:NAME, udp:HOST:PORT, udpin:[HOST:]PORT, "
+                     "tcp:HOST:PORT, tcpin:[HOST:]PORT or serial:DEVICE[:BAUD])")
     g.addoption("--mavlink-clauses", default="*", metavar="GLOB", help="clause id globs (default all)")
     g.addoption("--mavlink-strict", action="store_true", help="SHOULD failures fail too")
     g.addoption("--mavlink-expect", metavar="NAME|FILE", help="expectations file of known deviations")

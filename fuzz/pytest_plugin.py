@@ -26,7 +26,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     g = parser.getgroup("mavconform-fuzz", "MAVLink mission fuzz campaigns (mavconform)")
     g.addoption("--fuzz-target", metavar="URI",
                 help="fuzz URI (builtin:PROFILE: spec, px4, ardupilot, ... (`mavconform profiles`); mutant:NAME, "
-                     "udp:HOST:PORT or udpin:[HOST:]PORT)")
+                     "udp:HOST:PORT, udpin:[HOST:]PORT, tcp:HOST:PORT, tcpin:[HOST:]PORT or serial:DEVICE[:BAUD])")
     g.addoption("--fuzz-mode", default="protocol,frames", metavar="MODES",
                 help="comma-separated modes (default protocol,frames)")
     g.addoption("--fuzz-shards", type=int, default=2, metavar="N", help="shards per mode (default 2)")

@@ -68,7 +68,7 @@ def test_a_replayed_case_that_no_longer_fails_exits_0(tmp_path, capsys) -> None:
 
 
 @pytest.mark.parametrize("args, says", [
-    (["--target", "tcp:1:2"], "bad target"),
+    (["--target", "http:1:2"], "bad target"),
     (["--capture", "x.mcap"], "--capture goes with --replay"),
     (["--replay", "missing.json"], "cannot read fuzz case"),
     (["--replay", "missing.json", "--examples", "3"], "--examples, --time, --profile and --restart-cmd do not apply"),
