@@ -41,6 +41,7 @@ class StreamLink:
         self._fd: int | None = None         # the connected stream, when up
         self._out = bytearray()
         self._line_free_at = 0.0            # paced: when the line has sent what was written
+        self._blocked = False               # the kernel took no more: wait until it is writable
 
     # --- state ----------------------------------------------------------------------------
     @property
@@ -57,6 +58,7 @@ class StreamLink:
         self._fd = fd
         self.generation += 1
         self._out.clear()
+        self._blocked = False
         self._line_free_at = now
         self.note(now, what)
 
@@ -82,7 +84,7 @@ class StreamLink:
         if self._fd is None:
             return []
         paced = self.bytes_per_second is not None and now < self._line_free_at
-        return [(self._fd, True, bool(self._out) and not paced)]
+        return [(self._fd, True, bool(self._out) and (self._blocked or not paced))]
 
     def ready(self, fileobj: Any, readable: bool, writable: bool, now: float) -> bytes:
         """`fileobj` is ready: read what is there (returned), write what may go."""
@@ -117,11 +119,13 @@ class StreamLink:
         try:
             sent = os.write(self._fd, self._out[:n])
         except (BlockingIOError, InterruptedError):
+            self._blocked = True   # no deadline until it is writable: no busy loop on a full line
             return
         except OSError as exc:
             self._lost(now, f"write failed: {exc.strerror or exc}")
             self.on_lost(now)
             return
+        self._blocked = False
         del self._out[:sent]
         self.written += sent
         if rate is not None:
@@ -129,7 +133,7 @@ class StreamLink:
 
     def next_deadline(self) -> float | None:
         """When the link wants the driver back: the paced line is free again, or a retry."""
-        if self._out and self._fd is not None and self.bytes_per_second is not None:
+        if self._out and self._fd is not None and self.bytes_per_second is not None and not self._blocked:
             return self._line_free_at
         return None
 

@@ -123,3 +123,26 @@ def test_the_reference_vehicle_behind_a_pty_answers_over_the_device_it_names():
         tester.send(_MAV.MAVLink_mission_request_list_message(1, 1, 0))
         assert driver.run_until(lambda: any(f.msg._type == "MISSION_COUNT" for _, f in tester.inbox), timeout=5)
         assert driver.receive_queue(tester).drops is None   # a serial line does not count them
+
+
+def test_a_paced_line_nobody_reads_waits_for_the_kernel_not_in_a_busy_loop():
+    """The pty's buffer fills when nobody reads it: the link then has no deadline (which
+    would wake the driver at once, again and again) and waits to be writable instead."""
+    read_end, write_end = os.pipe()
+    os.set_blocking(write_end, False)
+    link = StreamLink("serial:test", "peer", "here", bytes_per_second=1e9)
+    link.max_queued = 1 << 24
+    link._connected(write_end, 0.0, "test pipe")
+    t = 0.0
+    for _ in range(100_000):   # fill the pipe
+        link.send(b"x" * 4096, t)
+        link.flush(t)
+        t += 1.0
+        if link.wanted(t)[0][2]:   # it waits to write
+            break
+    assert link.next_deadline() is None and link.wanted(t) == [(write_end, True, True)]
+    os.read(read_end, 1 << 20)   # someone reads: what waited goes out
+    link.flush(t)
+    assert link.wanted(t) == [(write_end, True, False)] and link.written == 4096 * (t)
+    link.close()
+    os.close(read_end)
