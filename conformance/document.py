@@ -39,6 +39,7 @@ class RunOptions:
     baseline: str | None = None
     handover_scenario: str | None = None   # --handover-scenario (None: the conformance scenario)
     role: str = "vehicle"                   # --role: which side of the protocol the target plays
+    profile: str | None = None              # --profile: what an external target is (its stored form)
 
 
 def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
@@ -66,6 +67,7 @@ def build(options: RunOptions, run: RunOutcome, *, started: dt.datetime,
             "interrupted_at": run.interrupted_at, "interrupted_by": run.interrupted_by,
             **({"handover_scenario": options.handover_scenario} if options.handover_scenario else {}),
             **({"role": options.role} if options.role != "vehicle" else {}),
+            **({"profile": options.profile} if options.profile else {}),
             **({"link": dict(run.link)} if run.link is not None else {}),
         },
         "identity": identity,

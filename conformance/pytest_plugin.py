@@ -27,6 +27,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     g.addoption("--mavlink-clauses", default="*", metavar="GLOB", help="clause id globs (default all)")
     g.addoption("--mavlink-strict", action="store_true", help="SHOULD failures fail too")
     g.addoption("--mavlink-expect", metavar="NAME|FILE", help="expectations file of known deviations")
+    g.addoption("--mavlink-profile", metavar="NAME|FILE",
+                help="what an external target is when its HEARTBEAT cannot say (e.g. inav)")
     g.addoption("--mavlink-time-scale", type=float, default=1.0, metavar="X", help="stretch waits by X")
     g.addoption("--mavlink-allow-flight", action="store_true", help="let progress clauses fly")
     g.addoption("--mavlink-report-dir", metavar="DIR", help="write run.json/junit/md/html/mcap here")
@@ -117,7 +119,8 @@ def _prepared(config: pytest.Config):
             target=config.getoption("--mavlink-target"), clauses=config.getoption("--mavlink-clauses"),
             strict=config.getoption("--mavlink-strict"), time_scale=config.getoption("--mavlink-time-scale"),
             expectations=config.getoption("--mavlink-expect"),
-            handover_scenario=config.getoption("--mavlink-handover-scenario"))
+            handover_scenario=config.getoption("--mavlink-handover-scenario"),
+            profile=config.getoption("--mavlink-profile"))
         try:
             _STATE["prepared"] = suite.prepare(options, report_dir=config.getoption("--mavlink-report-dir"))
         except UsageError as exc:
@@ -181,6 +184,8 @@ def mavlink_session(request: pytest.FixtureRequest):
                        started, capture)
             pytest.fail(f"target unresponsive: {exc}", pytrace=False)
         snapshot = _snapshot(session)
+        from . import readiness   # as `mavconform run` does: streams, forms, a target done booting
+        session.identity["prepared"] = readiness.prepare(session.t).line()
         yield session
         from .runner import InterruptGuard
         with InterruptGuard() as guard:   # a second signal must not cut the restore short

@@ -4,8 +4,10 @@ A real vehicle streams only what a GCS asks for (ArduCopter streams nothing by d
 VARIANTS.md L4) and may refuse uploads for a while after boot (ArduPilot answers
 MISSION_COUNT with NO_SPACE for about 2 s, L5). A GCS asks for its streams the modern way,
 MAV_CMD_SET_MESSAGE_INTERVAL, and falls back to REQUEST_DATA_STREAM where that is refused;
-then it waits until an upload is taken. Both are bounded, and what the target answered is
-one line of the report, so a clause that then misses a stream says why in the report.
+then it finds out whether the target answers the _INT forms at all (harness/float_forms.py:
+INAV answers only MISSION_ITEM / MISSION_REQUEST), and waits until an upload is taken. All
+are bounded, and what the target answered is one line of the report, so a clause that then
+misses a stream says why in the report.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from mavconform.reference_impl.mission.constants import Cmd, CommandResult, Miss
 from mavconform.reference_impl.mission.items import MissionType
 from mavconform.reference_impl.wire.dialect import mavlink as _d
 
-from .harness import plans, procedures
+from .harness import float_forms, plans, procedures
 from .harness.match import msg
 from .harness.measured import Measured
 from .harness.tester import Tester
@@ -33,13 +35,14 @@ READY_RETRY = 1.0                  # s between upload probes
 @dataclass
 class Readiness:
     streams: list[str]             # how each stream was asked for, and the answer
+    forms: str                     # whether the target answers the _INT forms
     ready: str                     # how the upload probe went
     waited_s: float = 0.0          # the target's boot, forced
 
     def line(self) -> str:
         """One line for the report. How long the target took to boot is measured, so it is a
         `Measured` text: the run document keeps it apart in its volatile section."""
-        parts = self.streams + [self.ready]
+        parts = self.streams + [self.forms, self.ready]
         values: dict[str, str] = {}
         for part in parts:
             values.update(getattr(part, "values", {}))
@@ -49,8 +52,9 @@ class Readiness:
 def prepare(t: Tester) -> Readiness:
     started = t.now()
     streams = [_ask_for_stream(t, *stream) for stream in STREAMS]
+    forms = float_forms.probe(t)
     ready = _await_uploads(t)
-    return Readiness(streams, ready, round(t.now() - started, 3))
+    return Readiness(streams, forms, ready, round(t.now() - started, 3))
 
 
 def _ask_for_stream(t: Tester, name: str, msg_id: int, group: int) -> str:

@@ -33,6 +33,7 @@ from .checks import CHECKS
 from .clause import Clause
 from .harness import procedures
 from .harness.exchange import Exchange
+from .harness.float_forms import JUDGES_INT_FORMS
 from .harness.measured import Measured
 from .outcome import (ClauseFailed, ClauseResult, NotApplicable, Outcome, PreconditionFailed,
                       Skipped, TargetUnresponsive)
@@ -317,6 +318,7 @@ def run_one(session: Session, clause: Clause) -> ClauseResult:
     exchange = Exchange(session.t.now())
     for t in testers:
         t.mark()
+        t.translate = clause.id not in JUDGES_INT_FORMS   # float-only targets (harness/float_forms.py)
     session.t.exchange = exchange
     if session._second is not None:
         session._second.exchange = exchange

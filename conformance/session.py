@@ -171,7 +171,8 @@ class Session:
         self.t.target = node.target
         msg = frame.msg
         self.t.form = (form_of_behaviour(self.vehicle.config.behaviour, f"builtin:{self.uri.name}")
-                       if self.vehicle is not None else form_for_target(msg.autopilot, msg.type))
+                       if self.vehicle is not None else self._profile_form()
+                       or form_for_target(msg.autopilot, msg.type))
         self.identity = {
             "system": frame.src_system, "component": frame.src_component, "type": msg.type,
             "autopilot": msg.autopilot, "mavlink_version": frame.version,
@@ -179,6 +180,14 @@ class Session:
         if self.on_identity is not None:
             self.on_identity(self.identity)
         return self.identity
+
+    def _profile_form(self) -> Any:
+        """The stored form `--profile` says the external target keeps, or None."""
+        if self.uri.profile is None:
+            return None
+        from mavconform.reference_impl.profiles import load_profile
+        profile = load_profile(self.uri.profile)
+        return form_of_behaviour(profile.behaviour, f"--profile {self.uri.profile}: the {profile.name} profile")
 
     def record_flight(self, style: str, plan: str, ending: Any) -> None:
         """Keep how a flight ended (a `landing.Ending`) for the run report."""
@@ -224,6 +233,7 @@ class Session:
         node.endpoint.add_address(self.target_address)
         tester = Tester(node, self.driver, scale=self.scale)
         tester.link_allowance = self.t.link_allowance
+        tester.int_forms, tester.translate = self.t.int_forms, self.t.translate
         tester.form = self.t.form
         tester.plan_ids = self.t.plan_ids   # one record of accepted plans for all GCSs
         tester.replaced_ids = self.t.replaced_ids

@@ -47,6 +47,7 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
     uri = parse_target(options.target)
     if options.handover_scenario:
         uri = uri.with_scenario(load_handover_scenario(options.handover_scenario))
+    uri = uri.with_profile(options.profile)
     clauses = catalogue.select(options.clauses, levels)
     if not clauses:
         raise UsageError(f"no clause matches --clauses {options.clauses!r} with --level {levels!r}")

@@ -120,6 +120,9 @@ class TargetUri:
     # what the target's mission computer was loaded with (--handover-scenario); None: the
     # conformance scenario (`handover_scenario`)
     scenario: Scenario | None = None
+    # what an external target is, when its HEARTBEAT cannot say (--profile: INAV reports a
+    # generic autopilot): the builtin profile or profile file whose stored form it keeps
+    profile: str | None = None
 
     @property
     def in_process(self) -> bool:
@@ -140,6 +143,20 @@ class TargetUri:
 
     def with_scenario(self, scenario: Scenario | None) -> "TargetUri":
         return replace(self, scenario=scenario)
+
+    def with_profile(self, profile: str | None, option: str = "--profile") -> "TargetUri":
+        """This external target, said to be what `profile` models (checked now: a bad name
+        or file is one line naming the option)."""
+        if profile is None:
+            return self
+        if self.in_process:
+            raise UsageError(f"{option} is for an external target; {self} names its vehicle already")
+        from mavconform.reference_impl.profiles import load_profile
+        try:
+            load_profile(profile)
+        except UsageError as exc:
+            raise UsageError(f"{option}: {exc}") from None
+        return replace(self, profile=profile)
 
     def suite_overrides(self) -> dict[str, Any]:
         """`VehicleConfig` fields the conformance suite sets on the in-process vehicle this

@@ -71,6 +71,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="clause ids to run, comma-separated globs, e.g. 'MIS.UP.*,MIS.CLR.0?' (default all)")
     p.add_argument("--level", metavar="LEVELS", help="only these levels, e.g. MUST or MUST,SHOULD")
     p.add_argument("--strict", action="store_true", help="SHOULD failures fail the run too")
+    p.add_argument("--profile", metavar="NAME|FILE",
+                   help="what an external target is, when its HEARTBEAT cannot say (INAV reports a generic "
+                        "autopilot): the builtin profile or profile file whose stored form the plans are "
+                        "compared in (`mavconform profiles`; default: chosen from the HEARTBEAT)")
     p.add_argument("--expect", metavar="NAME|FILE",
                    help="expectations file (or bundled name) listing known deviations")
     p.add_argument("--baseline", metavar="RUN.json",
@@ -108,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
             options = document.RunOptions(target=args.target or "builtin:spec", clauses=args.clauses,
                                           strict=args.strict, time_scale=args.time_scale, seed=args.seed,
                                           expectations=args.expect, baseline=args.baseline,
-                                          handover_scenario=args.handover_scenario)
+                                          handover_scenario=args.handover_scenario, profile=args.profile)
             prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
             print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
             on_result = None if args.quiet else _printer()

@@ -32,6 +32,7 @@ from mavconform.reference_impl.wire.frame import Frame
 
 from ..outcome import ClauseFailed, TargetUnresponsive
 from .exchange import Exchange, message_fields, relevant, used
+from .float_forms import INT_TO_FLOAT, to_float, widen
 from .match import Match
 from .measured import Measured
 from .stored_form import SPEC_FORM, StoredForm
@@ -57,6 +58,11 @@ class Tester:
         # added to every reply wait (`expect`, `poll_for`), set by the session from the link
         # (harness/link_timing.py); 0 on a network link
         self.link_allowance = 0.0
+        # False for a target that answers only MISSION_ITEM / MISSION_REQUEST (float_forms.py,
+        # found before the first clause); `translate`: the clause lets the tester use them
+        self.int_forms = True
+        self.translate = True
+        self._told: Exchange | None = None   # the exchange already told of the translation
         self.timings = timings
         self.target: tuple[int, int] = node.target or (0, 0)
         self.form: StoredForm = SPEC_FORM    # how the target keeps plans (set on discovery)
@@ -99,7 +105,18 @@ class Tester:
         self._floor = len(inbox)
         self._consumed.clear()
 
+    @property
+    def float_only(self) -> bool:
+        """The _INT forms are sent and waited for as their float twins (float_forms.py)."""
+        return not self.int_forms and self.translate
+
     def send(self, msg: Any) -> None:
+        if msg._type in INT_TO_FLOAT and self.float_only:
+            if self._told is not self.exchange:
+                self._told = self.exchange
+                self.note(f"the target answers only the float forms: the tester sends "
+                          f"{INT_TO_FLOAT[msg._type]} for {msg._type} (and so on for this clause)")
+            msg = to_float(msg)
         mission_type = getattr(msg, "mission_type", None)
         if mission_type is not None:
             self.touched_types.add(mission_type)
@@ -158,6 +175,7 @@ class Tester:
         """The first unconsumed frame since the floor that matches, waiting at most `within`
         seconds (default: the spec's 1500 ms), scaled. Fails the clause if none comes."""
         within = (self.reply_timeout if within is None else within * self.scale) + self.link_allowance
+        match = widen(match) if self.float_only else match
         found = self._find(match)
         if found is None:
             self.driver.run_until(self._arrival(match), timeout=within)
@@ -174,6 +192,7 @@ class Tester:
         the wait's length is set by the target (its stream period, its item timeout), so
         it counts as forced waiting, not as the suite's own time."""
         within = within * self.scale + self.link_allowance
+        match = widen(match) if self.float_only else match
         found = self._find(match)
         if found is None:
             started = self.now()
@@ -215,6 +234,9 @@ class Tester:
         start = self.now()
         end = start + for_ * self.scale
         quiet_s = None if quiet is None else quiet * self.scale
+        if self.float_only:
+            match = widen(match)
+            stop = widen(stop) if stop is not None else None
         out: list[tuple[float, Frame]] = []
         cursor = [self._floor]   # frames before it were taken or can never match
 

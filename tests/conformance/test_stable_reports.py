@@ -213,14 +213,16 @@ def test_how_long_the_target_took_to_boot_is_volatile(tmp_path) -> None:
     volatile.identity the numbers, and run.html shows them put back."""
     ready = Measured("upload probe: MAV_MISSION_ACCEPTED after <boot_refusals> NO_SPACE refusal(s) "
                      "in <boot_wait>", boot_refusals="3", boot_wait="3.2 s")
-    line = readiness.Readiness(["MISSION_CURRENT at 1 Hz: accepted"], ready).line()
-    assert line == ("MISSION_CURRENT at 1 Hz: accepted; upload probe: MAV_MISSION_ACCEPTED after 3 "
-                    "NO_SPACE refusal(s) in 3.2 s")
+    forms = "forms probe: MISSION_REQUEST_INT answered"
+    line = readiness.Readiness(["MISSION_CURRENT at 1 Hz: accepted"], forms, ready).line()
+    assert line == ("MISSION_CURRENT at 1 Hz: accepted; forms probe: MISSION_REQUEST_INT answered; upload "
+                    "probe: MAV_MISSION_ACCEPTED after 3 NO_SPACE refusal(s) in 3.2 s")
     result = DecidedResult("MIS.UP.01", Outcome.PASS, "ok", 0.5, [])
     flags, summary = gating.gate([result], strict=False, baseline=None)
     docs = [document.build(document.RunOptions("udp:127.0.0.1:1"), RunOutcome(
         [result], {"system": 1, "component": 1, "prepared": readiness.Readiness(
-            ["MISSION_CURRENT at 1 Hz: accepted"], Measured(ready.stable, boot_refusals=n, boot_wait=w)).line()},
+            ["MISSION_CURRENT at 1 Hz: accepted"], forms, Measured(ready.stable, boot_refusals=n,
+                                                                   boot_wait=w)).line()},
         {"status": "skipped", "detail": ""}, 1.5, 0.0), started=dt.datetime(2026, 1, 1),
         gating_flags=flags, gating=summary, capture=None) for n, w in (("3", "3.2 s"), ("1", "1.1 s"))]
     for doc in docs:
