@@ -41,6 +41,9 @@ def _stored_types(t: Tester, variant: int) -> dict[MissionType, list[MissionItem
         frame = procedures.upload(t, items, mission_type)
         if frame is not None and frame.msg.type == MissionResult.UNSUPPORTED and mission_type is not MISSION:
             continue
+        crossed = procedures.other_type_answer(t, mission_type) if frame is None else None
+        if crossed is not None:
+            raise NotApplicable(crossed)
         if frame is None or frame.msg.type != MissionResult.ACCEPTED:
             raise PreconditionFailed(f"setup: uploading a {mission_type.label} plan "
                                      + ("got no MISSION_ACK" if frame is None else

@@ -13,7 +13,7 @@ from ..harness import plans, procedures
 from ..harness.match import ITEMS, ack, item, msg
 from ..harness.stored_form import StoredForm
 from ..harness.tester import Tester
-from ..outcome import ClauseFailed, PreconditionFailed
+from ..outcome import ClauseFailed, NotApplicable, PreconditionFailed
 from ..session import Session
 from . import check
 
@@ -301,6 +301,9 @@ def download_flags_the_current_item(s: Session) -> None:
         current = CURRENT_SEQ
     else:
         reported = _currents_after(t, asked)
+        if not reported and not any(f.msg._type == "MISSION_CURRENT" for _, f in t.node.inbox):
+            raise NotApplicable("the vehicle has sent no MISSION_CURRENT since the run began (MIS.CUR.06 "
+                                "judges that), so which item it holds current cannot be known")
         if not reported:
             raise PreconditionFailed(f"setup: after MISSION_SET_CURRENT {CURRENT_SEQ} the vehicle sent no "
                                      "MISSION_CURRENT, so which item is current is unknown (MIS.CUR.01 "

@@ -33,6 +33,9 @@ def put_plan(t: Tester, items: list[MissionItem], mission_type: MissionType) -> 
     frame = procedures.upload(t, items, mission_type)
     if frame is not None and frame.msg.type == MissionResult.UNSUPPORTED and mission_type is not MISSION:
         return False
+    crossed = procedures.other_type_answer(t, mission_type) if frame is None else None
+    if crossed is not None:
+        raise NotApplicable(crossed)
     if frame is None or frame.msg.type != MissionResult.ACCEPTED:
         what = "no MISSION_ACK" if frame is None else procedures.result_name(frame.msg.type)
         raise PreconditionFailed(f"setup: uploading a {len(items)}-item {mission_type.label} plan got {what}")

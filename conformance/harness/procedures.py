@@ -9,7 +9,9 @@ not failed: the clause that owns that behaviour is where it gets judged.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from typing import Any, Callable, TypeVar
 
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import CommandResult, MissionResult
@@ -17,12 +19,22 @@ from mavconform.reference_impl.mission.items import MissionItem, MissionType
 from mavconform.reference_impl.wire.frame import Frame
 
 from ..outcome import ClauseFailed, PreconditionFailed
-from .match import Match, ack, msg, request
+from .match import REQUESTS, Match, ack, msg, request
 from .stored_form import SPEC_FORM, StoredForm, describe_differences
 from .tester import Tester
 
 RETRIES = 5
 MAX_ITEMS = 5000   # the largest plan read back (restoring a bigger one is left to the user)
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def _cooperative(fn: F) -> F:
+    """A whole operation: the float forms on a float-only target, whatever the clause."""
+    @functools.wraps(fn)
+    def run(t: Tester, *args: Any, **kwargs: Any) -> Any:
+        with t.cooperative():
+            return fn(t, *args, **kwargs)
+    return run   # type: ignore[return-value]
 
 
 @dataclass
@@ -46,9 +58,11 @@ def command_result_name(code: int) -> str:
         return f"MAV_RESULT {code} (not a defined value)"
 
 
+@_cooperative
 def upload(t: Tester, items: list[MissionItem], mission_type: MissionType, *,
            as_int: bool = True) -> Frame | None:
-    """Upload `items`; the vehicle's final MISSION_ACK (any code), or None if it never came."""
+    """Upload `items`; the vehicle's final MISSION_ACK (any code), or None if it never came
+    (then `other_type_answer` says whether it answered for another plan type)."""
     mt = int(mission_type)
     t.mark()
     t.send(m.count_message(len(items), mission_type, t.target))
@@ -74,6 +88,21 @@ def upload(t: Tester, items: list[MissionItem], mission_type: MissionType, *,
     return None
 
 
+def other_type_answer(t: Tester, mission_type: MissionType) -> str | None:
+    """After an upload of `mission_type` that got no MISSION_ACK: if the vehicle answered it
+    with requests or an ACK for another plan type (INAV ignores mission_type and takes every
+    upload as the mission), what it did, for a clause to say it cannot judge such a vehicle."""
+    mt = int(mission_type)
+    for frame in reversed(t.since_mark()):
+        name = frame.msg._type
+        if (name in REQUESTS or name == "MISSION_ACK") and getattr(frame.msg, "mission_type", mt) != mt:
+            return (f"the vehicle answered a {mission_type.label} MISSION_COUNT with {name} for mission_type "
+                    f"{frame.msg.mission_type}: it does not keep {mission_type.label} plans apart "
+                    "(MIS.TYP.02 judges that)")
+    return None
+
+
+@_cooperative
 def serve_upload(t: Tester, items: list[MissionItem], mission_type: MissionType = MissionType.MISSION, *,
                  as_int: bool = True) -> Frame | None:
     """Answer whatever the vehicle requests of a running upload of `items` until its
@@ -177,6 +206,7 @@ def set_current(t: Tester, seq: int, *, resends: int = 1) -> tuple[Frame | None,
     return None, ""
 
 
+@_cooperative
 def download(t: Tester, mission_type: MissionType, *, as_int: bool = True) -> Download | None:
     """Read the `mission_type` plan back; None if the target did not complete the download."""
     mt = int(mission_type)

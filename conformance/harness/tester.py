@@ -25,7 +25,8 @@ new one per clause; both GCSs share it), not at the floor: checks `mark()` mid-c
 
 from __future__ import annotations
 
-from typing import Any, Callable, Protocol
+import contextlib
+from typing import Any, Callable, Iterator, Protocol
 
 from mavconform.reference_impl.mission.timing import Timings
 from mavconform.reference_impl.wire.frame import Frame
@@ -104,6 +105,16 @@ class Tester:
             del inbox[: len(inbox) - KEEP_FRAMES // 2]
         self._floor = len(inbox)
         self._consumed.clear()
+
+    @contextlib.contextmanager
+    def cooperative(self) -> Iterator[None]:
+        """A whole operation done to set up or check state (procedures.py): on a float-only
+        target it uses the float forms even in a clause that judges the _INT ones."""
+        saved, self.translate = self.translate, True
+        try:
+            yield
+        finally:
+            self.translate = saved
 
     @property
     def float_only(self) -> bool:

@@ -110,6 +110,8 @@ def test_dead_target_is_reported_fast(tmp_path, capsys) -> None:
     (["run", "--level", " , "], "no level given"),
     (["run", "--baseline", "/nonexistent/run.json"], "/nonexistent/run.json"),
     (["run", "--expect", "nosuchautopilot"], "nosuchautopilot"),
+    (["run", "--target", "builtin:spec", "--profile", "px4"], "--profile is for an external target"),
+    (["run", "--target", "udp:127.0.0.1:9", "--profile", "nosuchprofile"], "--profile: "),
     (["run", "--time-scale", "0"], "must be a finite number > 0"),
     (["run", "--time-scale", "-1"], "must be a finite number > 0"),     # issue 12: one message for both
     (["run", "--time-scale", "1e308"], "must be at most 100"),          # issue 12: not an endless wait
@@ -267,3 +269,16 @@ def test_time_scale_does_not_fail_correct_timers(tmp_path, capsys) -> None:
     code, out, _ = _run(capsys, "run", "--clauses", "MIS.UP.07,MIS.CUR.06", "--time-scale", "3", "--strict",
                         "--report-dir", str(tmp_path))
     assert code == 0, out
+
+
+@pytest.mark.udp
+def test_profile_says_what_an_external_target_is(capsys, tmp_path) -> None:
+    """Issue 24: INAV's HEARTBEAT says "generic autopilot", so its profile cannot be chosen
+    from it: --profile names it, and the plans are compared in that profile's stored form."""
+    from ..vehicle_process import vehicle_process
+    with vehicle_process("--quiet") as port:
+        code = main(["run", "--target", f"udp:127.0.0.1:{port}", "--profile", "ardupilot", "--clauses", "MIS.UP.01",
+                     "--report-dir", str(tmp_path), "-q"])
+    doc = json.loads((tmp_path / "run.json").read_text())
+    assert code == 0 and doc["run"]["profile"] == "ardupilot"
+    assert "--profile ardupilot" in doc["identity"]["stored_form"], doc["identity"]["stored_form"]
