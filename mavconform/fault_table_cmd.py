@@ -29,12 +29,19 @@ usage mistake.
 """
 
 
+def default_profiles() -> list:
+    """Every builtin profile the reference GCS can drive: a vehicle that ignores the _INT mission
+    messages (inav) waits for the GCS's fallback to MISSION_ITEM / MISSION_REQUEST."""
+    return [p for p in (load_profile(name) for name in BUILTIN_PROFILES) if not p.int_messages_ignored]
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fault-table", help="GCS interop and MockLink fault-tolerance report",
                        description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--profile", action="append", metavar="NAME|FILE", dest="profiles",
                    help=f"a vehicle profile (builtin: {', '.join(BUILTIN_PROFILES)}; or a profile "
-                        "file); repeat for several (default: every builtin one)")
+                        "file); repeat for several (default: every builtin one the reference GCS can "
+                        "drive: not inav, which ignores the _INT mission messages)")
     p.add_argument("--format", choices=("md", "json"), default="md", help="output format (default md)")
     p.add_argument("--output", metavar="FILE", help="write the report here instead of stdout")
     p.add_argument("--seed", type=int, default=0, help="seed of the virtual networks (default 0)")
@@ -42,7 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    profiles = [load_profile(name) for name in (args.profiles or BUILTIN_PROFILES)]
+    profiles = ([load_profile(name) for name in args.profiles] if args.profiles
+                else default_profiles())
     if len({p.name for p in profiles}) != len(profiles):
         raise UsageError("--profile: the same profile is named twice")
     out = Path(args.output) if args.output else None

@@ -81,6 +81,9 @@ class VehicleConfig:
     params: tuple[Param, ...] = ()
     # the GCS link is bound to one peer address (real SITL links: VARIANTS.md L1, L2)
     single_peer_link: bool = False
+    # Messages (by name) the autopilot has no handler for: dropped unread, never answered
+    # (INAV 9.1 ignores MISSION_ITEM_INT, MISSION_REQUEST_INT, MISSION_ACK, COMMAND_LONG, ...)
+    ignored_messages: frozenset[str] = frozenset()
     # Operator control. None (the default): no system manager, 32100 is UNSUPPORTED and any
     # GCS may change state, as before. Set: the vehicle is its own system manager. Unowned,
     # the filter stays closed unless `control.open_when_unowned`: a GCS asks for control
@@ -164,6 +167,8 @@ class VehicleNode:
     def datagram_received(self, data: bytes, source: Address, now: float) -> None:
         for frame in self.endpoint.receive(data, source):
             self.frames_received += 1
+            if frame.msg._type in self.config.ignored_messages:
+                continue
             if self.control is not None and not self._passes_control(frame, now):
                 continue
             msg = frame.msg

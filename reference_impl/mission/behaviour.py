@@ -42,13 +42,30 @@ class ServerBehaviour:
     # (seed 000: after the retries "the client must cancel the operation").
     notify_upload_give_up: bool = True
     # MISSION_CURRENT stream period (upstream: "streamed all the time (nominally at 1Hz)").
-    current_period: float = 1.0
+    # None: MISSION_CURRENT is never sent, neither streamed nor on a change (INAV 9.1).
+    current_period: float | None = 1.0
+    # Every mission message is about the mission plan, whatever its mission_type: replies
+    # carry MAV_MISSION_TYPE_MISSION, and a fence or rally request, clear or upload (any
+    # type, ALL too) reads, clears or replaces the mission (INAV 9.1 never reads the field).
+    mission_type_ignored: bool = False
+    # A mission message is for this vehicle only when its target_system is the vehicle's own
+    # (no broadcast 0), and its target_component is not looked at. False: target_system 0
+    # or ours, and target_component 0 or ours.
+    target_system_only: bool = False
 
     # --- upload ---------------------------------------------------------------------------
     # Collect an upload aside and replace the plan whole after the last item (seed 000).
     # False: MISSION_COUNT truncates the stored plan at once and each item is written as it
     # arrives, so a failed upload leaves a mix of old and new.
     atomic_upload: bool = True
+    # With atomic_upload False: MISSION_COUNT leaves the stored plan alone; item 0 clears it
+    # and each item is appended as it arrives, so a stalled upload leaves the items so far.
+    # False: MISSION_COUNT truncates the plan and items overwrite it in place.
+    item0_clears_plan: bool = False
+    # MISSION_COUNT 0 opens an upload like any count: MISSION_REQUEST for item 0, which is
+    # then the last (its ACCEPTED replaces the plan with that one item). False (seed 000):
+    # an empty upload clears the plan at once with ACCEPTED.
+    count0_opens_upload: bool = False
     # An item the vehicle refuses ends the upload (seed 000: errors are unrecoverable).
     # False: the error ACK is sent and the vehicle goes on requesting.
     nack_ends_upload: bool = True
@@ -60,6 +77,9 @@ class ServerBehaviour:
     # Resends of one request are capped at `timings.max_retries`; False: resend until
     # `timings.protocol_timeout` passes without a message from the partner.
     retry_cap: bool = True
+    # The vehicle times an upload (item re-requests, giving up). False: no timer at all: a
+    # stalled upload is never re-requested and never ended, it waits for its next item.
+    upload_timers: bool = True
     # STATUSTEXT (WARNING) sent with the give-up of a silent upload; "" for none.
     give_up_statustext: str = ""
     # A MISSION_ACK from the GCS (e.g. OPERATION_CANCELLED) ends its running upload.
@@ -106,7 +126,9 @@ class ServerBehaviour:
     # (altitude in whole cm, hold time in whole seconds, other waypoint params dropped,
     # rally altitude in whole metres, *_INT frames reported as their plain frames), or
     # "compact15-plane": ArduPlane's build of it (a waypoint keeps acceptance radius and pass-by
-    # distance as whole metres up to 255 instead of its hold time).
+    # distance as whole metres up to 255 instead of its hold time), or "float32-cm": a record
+    # filled in float32 (lat/lon through x * 1e7f, altitude whole cm, params dropped, RTL in
+    # MAV_FRAME_MISSION; INAV 9.1).
     item_storage: str = "exact"
     # A downloaded mission item carries current=1 exactly when it is the current item
     # (False: the flag is 0 on every item, whatever is current).
@@ -146,6 +168,10 @@ class ServerBehaviour:
             raise ValueError(f"item_storage must be one of {sorted(STORAGE_FORMS)}, got {self.item_storage!r}")
         if self.item_reached_repeats < 1:
             raise ValueError("item_reached_repeats must be >= 1")
+        if self.item0_clears_plan and self.atomic_upload:
+            raise ValueError("item0_clears_plan needs atomic_upload=False (an atomic upload never writes early)")
+        if self.current_period is not None and not self.current_period > 0:
+            raise ValueError("current_period must be > 0 seconds (or None: never sent)")
         if not self.retry_cap and self.timings.protocol_timeout is None:
             raise ValueError("retry_cap=False needs timings.protocol_timeout (else retries never end)")
 

@@ -35,7 +35,7 @@ class MissionProgress:
     kept in one slot until REACHED_SLOT_DELAY later, and a later item reached by then
     replaces it (PX4 and ArduPilot keep one pending reached index per link)."""
 
-    def __init__(self, store: MissionStore, period: float, *, home_at_seq0: bool = False,
+    def __init__(self, store: MissionStore, period: float | None, *, home_at_seq0: bool = False,
                  report_ids: bool = True, reached_repeats: int = 1, reached_one_slot: bool = False,
                  unreported: frozenset[int] = frozenset()) -> None:
         self.store = store
@@ -48,7 +48,7 @@ class MissionProgress:
         self.seq = 0
         self.running = False
         self.complete = False
-        self._next_stream: float | None = 0.0
+        self._next_stream: float | None = 0.0 if period is not None else None   # None: never sent
         self._repeat: tuple[int, int, float] | None = None   # (seq, sends left, next at)
         self._slot: tuple[int, float] | None = None            # (seq, send at): reached_one_slot
         self._announce_due = False                              # a MISSION_CURRENT to send with the slot
@@ -80,7 +80,10 @@ class MissionProgress:
         return m.current_message(self.seq, total, int(self.state), mode, ids)
 
     def announce(self, now: float) -> list[Send]:
-        """Broadcast MISSION_CURRENT now and restart the stream period."""
+        """Broadcast MISSION_CURRENT now and restart the stream period (a vehicle without
+        MISSION_CURRENT, period None: nothing)."""
+        if self.period is None:
+            return []
         self._next_stream = now + self.period
         return [Send(self.current_message())]
 

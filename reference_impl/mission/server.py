@@ -192,11 +192,11 @@ class MissionServer:
         if count > self.behaviour.capacity.get(t, 0):
             self._move(slot, SlotEvent.COUNT_REJECTED)
             return [Send(m.ack_message(MissionResult.NO_SPACE, t, src), src)]
-        if count == 0:
+        if count == 0 and not self.behaviour.count0_opens_upload:
             # Seed 000: an empty upload "has the same effect as clearing the mission".
             self._move(slot, SlotEvent.COUNT_ZERO)
             return self._commit(t, [], src, now)
-        if not self.behaviour.atomic_upload:
+        if not self.behaviour.atomic_upload and not self.behaviour.item0_clears_plan:
             self._write(t, list(self.store.items(t)[:count]))   # truncated at once (A2)
         self._open_upload(slot, src, count, 0, now, partial=False)
         self._move(slot, SlotEvent.COUNT)
@@ -249,13 +249,16 @@ class MissionServer:
             code = (MissionResult.INVALID_PARAM5_X if m.float_xy_defect(msg) == 5
                     else MissionResult.INVALID_PARAM6_Y)
             return out + self._reject(slot, code, src)
+        if b.mission_type_ignored and item.mission_type is not t:
+            item = replace(item, mission_type=t)
         defect = first_defect(item, b.item_rules)
         if defect is not None:
             return out + self._reject(slot, defect.code, src)
         item = self._keep(item)
         slot.received.append(item)
-        if not b.atomic_upload:   # written as it arrives (A2)
-            self._write(t, self._spliced(t, item.seq, [item]))
+        if not b.atomic_upload:   # written as it arrives (A2); item 0 clears the plan (item0_clears_plan)
+            self._write(t, list(slot.received) if b.item0_clears_plan and not slot.partial
+                        else self._spliced(t, item.seq, [item]))
         if len(slot.received) < slot.count:
             slot.expected += 1
             self._move(slot, SlotEvent.ITEM_NEXT)
@@ -347,7 +350,8 @@ class MissionServer:
     def _on_clear_all(self, msg: Any, src: Peer, now: float) -> list[Send]:
         raw = msg.mission_type
         b = self.behaviour
-        if raw == MissionType.ALL:
+        everything = raw == MissionType.ALL and not b.mission_type_ignored
+        if everything:
             if not b.clear_all_supported:
                 return self._unsupported(raw, src)
             types: tuple[MissionType, ...] = tuple(t for t in PLAN_TYPES if t in b.supported_types)
@@ -356,7 +360,7 @@ class MissionServer:
             if t is None:
                 return self._unsupported(raw, src)
             types = (t,)
-        reply_type = MissionType.ALL if raw == MissionType.ALL else types[0]
+        reply_type = MissionType.ALL if everything else types[0]
         if any(self._busy_with_other(self._slots[t], src) for t in types):
             self.stats.denied += 1
             return [Send(m.ack_message(MissionResult.DENIED, reply_type, src), src)]
@@ -439,6 +443,9 @@ class MissionServer:
         if reset_retries:
             slot.retries = 0
         timings = self.behaviour.timings
+        if not self.behaviour.upload_timers:   # no timer: never re-requested, never given up
+            slot.deadline = None
+            return [Send(self._request_msg(slot), slot.partner)]
         slot.deadline = now + timings.item_timeout
         if timings.protocol_timeout is not None:
             slot.deadline = min(slot.deadline, slot.last_heard + timings.protocol_timeout)
@@ -559,6 +566,8 @@ class MissionServer:
         return [Send(m.statustext_message(Severity.WARNING, text))]
 
     def _plan_type(self, raw: int) -> MissionType | None:
+        if self.behaviour.mission_type_ignored:
+            return MissionType.MISSION
         t = PLAN_TYPE_BY_VALUE.get(raw)
         if t is None or t not in self.behaviour.supported_types:
             return None
@@ -569,6 +578,8 @@ class MissionServer:
 
     def _addressed_to_us(self, msg: Any) -> bool:
         ts = getattr(msg, "target_system", 0)
+        if self.behaviour.target_system_only:
+            return ts == self.system
         tc = getattr(msg, "target_component", 0)
         return ts in (0, self.system) and tc in (0, self.component)
 

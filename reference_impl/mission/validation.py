@@ -10,7 +10,8 @@ are a set a profile may widen (`rules_for`); the spec vehicle knows every missio
 the upstream XML (commands.py) in any global frame or MAV_FRAME_MISSION. A NaN in params 1-4
 means "use the default" to the spec vehicle; a profile may say which params of which commands
 may be NaN (`param_rules`, checked before anything else, as ArduPilot does), cap the
-altitude of a location (`altitude_rules`) and leave latitude and longitude unchecked (PX4).
+altitude of a location (`altitude_rules`), leave latitude and longitude unchecked (PX4), and
+refuse autocontinue 0 or allow each command only some frames (`command_frame_rules`, INAV).
 """
 
 from __future__ import annotations
@@ -113,6 +114,24 @@ def command_rules(mission_commands: MissionCommands) -> tuple[ItemRule, ...]:
                      lambda it: selected(it.frame) is not None), command)
 
 
+def command_frame_rules(command_frames: Mapping[int, AbstractSet[int]] | None,
+                        autocontinue_required: bool = False) -> tuple[ItemRule, ...]:
+    """Rules checked right after the command. `autocontinue_required`: a mission item with
+    autocontinue 0 gets MAV_MISSION_UNSUPPORTED, as an unknown command does. `command_frames`
+    (command -> frames): a mission item with a listed command in another frame gets
+    UNSUPPORTED_FRAME (INAV 9.1: NAV_WAYPOINT only in frame 3, RTL in 3 or 2)."""
+    rules: tuple[ItemRule, ...] = ()
+    if autocontinue_required:
+        rules += (ItemRule("autocontinue set", MissionResult.UNSUPPORTED, _in_mission,
+                           lambda it: it.autocontinue != 0),)
+    if command_frames is not None:
+        table = {command: frozenset(frames) for command, frames in command_frames.items()}
+        rules += (ItemRule("a frame its command takes", MissionResult.UNSUPPORTED_FRAME,
+                           lambda it: _in_mission(it) and it.command in table,
+                           lambda it: it.frame in table[it.command]),)
+    return rules
+
+
 _FRAME_KNOWN = ItemRule("frame known", MissionResult.UNSUPPORTED_FRAME,
                         lambda it: True, lambda it: it.frame in GLOBAL_FRAMES or it.frame == FRAME_MISSION)
 _POSITIONS_GLOBAL = ItemRule("positions use a global frame", MissionResult.UNSUPPORTED_FRAME,
@@ -208,13 +227,17 @@ def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
               location_frames: AbstractSet[int] | None = None,
               nan_params: NanParams | None = None,
               location_alt_max: float | None = None,
-              lat_lon_range_check: bool = True) -> tuple[ItemRule, ...]:
+              lat_lon_range_check: bool = True,
+              command_frames: Mapping[int, AbstractSet[int]] | None = None,
+              autocontinue_required: bool = False) -> tuple[ItemRule, ...]:
     """The spec rules with another set (or frame table) of mission commands (None: any
     command, see `command_rules`), other frames for items with a location (`frame_rules`),
     params that may be NaN (`param_rules`), an altitude cap (`altitude_rules`), and without
-    the latitude/longitude range check (`lat_lon_range_check=False`: PX4 takes them as sent)."""
+    the latitude/longitude range check (`lat_lon_range_check=False`: PX4 takes them as sent),
+    with per-command frames and autocontinue required (`command_frame_rules`)."""
     lat_lon = _LAT_LON_RULES if lat_lon_range_check else ()
-    return (*param_rules(nan_params), *command_rules(mission_commands), *frame_rules(location_frames),
+    return (*param_rules(nan_params), *command_rules(mission_commands),
+            *command_frame_rules(command_frames, autocontinue_required), *frame_rules(location_frames),
             *_FIELD_RULES, *lat_lon, _ALTITUDE_FINITE, *altitude_rules(location_alt_max),
             *_COMMAND_VALUE_RULES)
 

@@ -185,6 +185,35 @@ def _nan_params(v: Any) -> dict[int, frozenset[int]]:
     return table
 
 
+def _command_frames(v: Any) -> dict[int, frozenset[int]]:
+    """command_frames = {COMMAND = [frames], ...}: the only frames each listed mission command
+    (a MAV_CMD name, or its number quoted) may use."""
+    if not isinstance(v, dict) or not v:
+        raise ValueError(f"expected a table of MAV_CMD names -> lists of MAV_FRAME names or numbers, got {v!r}")
+    table: dict[int, frozenset[int]] = {}
+    for key, frames in v.items():
+        command = _command_value(int(key) if key.isdigit() else key)
+        if command in table:
+            raise ValueError(f"{key!r}: command {command} is listed twice")
+        try:
+            table[command] = _frames(frames)
+        except ValueError as exc:
+            raise ValueError(f"{key}: {exc}") from None
+    return table
+
+
+_MESSAGE_NAMES = frozenset(cls.msgname for cls in _d.mavlink_map.values())
+
+
+def _message_names(v: Any) -> frozenset[str]:
+    """[MAVLink message names], e.g. ["MISSION_ITEM_INT", "COMMAND_LONG"]."""
+    def known(name: Any) -> str:
+        if not isinstance(name, str) or name.upper() not in _MESSAGE_NAMES:
+            raise ValueError(f"{name!r} is no message of the dialect (e.g. MISSION_ITEM_INT, COMMAND_LONG)")
+        return name.upper()
+    return frozenset(_values(v, "MAVLink message names", known))
+
+
 _MAV_TYPE_BY_NAME = {e.name.removeprefix("MAV_TYPE_"): value for value, e in _d.enums["MAV_TYPE"].items()
                      if not e.name.endswith("_ENUM_END")}
 
@@ -235,6 +264,11 @@ _KNOBS = (
     Knob("location_alt_max", RULES, "location_alt_max", _metres,
          "m: a mission item whose command has a location needs a finite altitude below this in "
          "magnitude (else INVALID_PARAM7; default: a destination's altitude need only be finite)"),
+    Knob("command_frames", RULES, "command_frames", _command_frames,
+         "the only frames each listed mission command may use ({COMMAND = [frames]}; others: "
+         "UNSUPPORTED_FRAME, checked right after the command)"),
+    Knob("autocontinue_required", RULES, "autocontinue_required", _bool,
+         "a mission item with autocontinue 0 gets UNSUPPORTED, checked with the command"),
     Knob("lat_lon_range_check", RULES, "lat_lon_range_check", _bool,
          "a mission item in a global frame needs a latitude within +-90 and a longitude within "
          "+-180 degrees (else INVALID_PARAM5_X / INVALID_PARAM6_Y); false: taken as sent"),
@@ -243,8 +277,24 @@ _KNOBS = (
     Knob("notify_upload_give_up", BEHAVIOUR, "notify_upload_give_up", _bool,
          "a given-up upload is ended with MISSION_ACK OPERATION_CANCELLED"),
     Knob("give_up_statustext", BEHAVIOUR, "give_up_statustext", _text, "STATUSTEXT sent when an upload is given up (\"\": none)"),
-    Knob("current_period", BEHAVIOUR, "current_period", _seconds, "s between streamed MISSION_CURRENTs"),
+    Knob("current_period", BEHAVIOUR, "current_period", _seconds_or_none,
+         "s between streamed MISSION_CURRENTs (\"none\": MISSION_CURRENT is never sent, not even on a change)"),
+    Knob("mission_type_ignored", BEHAVIOUR, "mission_type_ignored", _bool,
+         "every mission message is about the mission, whatever its mission_type: replies carry 0, and a "
+         "fence, rally or ALL request, clear or upload reads, clears or replaces the mission"),
+    Knob("target_system_only", BEHAVIOUR, "target_system_only", _bool,
+         "a mission message is for the vehicle only when its target_system is the vehicle's own: no "
+         "broadcast (0), and target_component is not read"),
     Knob("atomic_upload", BEHAVIOUR, "atomic_upload", _bool, "an upload replaces the plan whole after its last item"),
+    Knob("item0_clears_plan", BEHAVIOUR, "item0_clears_plan", _bool,
+         "with atomic_upload = false: MISSION_COUNT leaves the stored plan alone, item 0 clears it and each "
+         "item is appended (false: MISSION_COUNT truncates the plan, items overwrite it in place)"),
+    Knob("count0_opens_upload", BEHAVIOUR, "count0_opens_upload", _bool,
+         "MISSION_COUNT 0 is answered with a MISSION_REQUEST for item 0, which is then the last "
+         "(false: it clears the plan, ACCEPTED)"),
+    Knob("upload_timers", BEHAVIOUR, "upload_timers", _bool,
+         "the vehicle times an upload (re-requests, gives up); false: no timer at all, a stalled upload "
+         "is never re-requested and never ended"),
     Knob("nack_ends_upload", BEHAVIOUR, "nack_ends_upload", _bool, "a refused item ends the upload"),
     Knob("out_of_sequence_reply", BEHAVIOUR, "out_of_sequence_reply", _result_or_none,
          "MISSION_ACK for an out-of-sequence item (\"none\": dropped silently)"),
@@ -300,6 +350,8 @@ _KNOBS = (
          "for a vehicle without modes"),
     Knob("single_peer_link", CONFIG, "single_peer_link", _bool,
          "the GCS link is bound to the first peer address: other senders are never read"),
+    Knob("ignored_messages", CONFIG, "ignored_messages", _message_names,
+         "messages (MAVLink names) the autopilot has no handler for: dropped unread, never answered"),
     # --- the vehicle model: what flies, and how the autopilot flies it (issue 23) ---
     Knob("vehicle_type", CONFIG, "vehicle_type", _mav_type,
          "HEARTBEAT.type (MAV_TYPE, by name or number); its class (vehicle_class.py) says how it flies: "

@@ -1,5 +1,5 @@
 """Reading profile files: the bundled ones (BUILTIN_PROFILES: `spec`, `px4` and its fixed-wing
-and VTOL, `ardupilot` and its plane and rover), or a user's own.
+and VTOL, `ardupilot` and its plane and rover, `inav`), or a user's own.
 
     name = "my-fork"
     description = "our PX4 fork: retries capped again"
@@ -43,7 +43,7 @@ else:  # pragma: no cover - Python 3.10
 
 BUNDLED = Path(__file__).parent
 BUILTIN_PROFILES: tuple[str, ...] = ("spec", "px4", "px4-fixedwing", "px4-vtol", "ardupilot", "ardupilot-plane",
-                                     "ardupilot-rover")
+                                     "ardupilot-rover", "inav")
 MAX_BASE_DEPTH = 8
 _TOP_KEYS = {"name", "description", "base", "knob", "documented"}
 _KNOB_KEYS = {"knob", "value", "variant", "source", "why", "alternative", "seen_on"}

@@ -47,7 +47,9 @@ def _refused(stem: str, profile_name: str) -> MissionResult | None:
     return REFUSED.get((stem, profile_name.split("-")[0]))
 
 
-@pytest.mark.parametrize("profile_name", BUILTIN_PROFILES)
+# (inav: it ignores the _INT mission messages, which the reference GCS does not fall back from
+# yet, and it stores only NAV_WAYPOINT and RTL, which no fixture is made of)
+@pytest.mark.parametrize("profile_name", [n for n in BUILTIN_PROFILES if not load_profile(n).int_messages_ignored])
 @pytest.mark.parametrize("source", FIXTURES, ids=lambda p: p.stem)
 def test_fixture_goes_up_and_comes_back(profile_name: str, source: Path, tmp_path: Path) -> None:
     profile = load_profile(profile_name)
@@ -95,6 +97,8 @@ def test_roi_camera_and_gimbal_items_go_up_to_every_profile() -> None:
     """The fixtures every builtin profile takes hold an ROI, a gimbal and a camera item."""
     wanted = {by_name(n).value for n in ("DO_SET_ROI_LOCATION", "DO_GIMBAL_MANAGER_PITCHYAW", "IMAGE_START_CAPTURE")}
     for name in BUILTIN_PROFILES:
+        if load_profile(name).int_messages_ignored:
+            continue   # inav stores only NAV_WAYPOINT and RTL
         taken = [s.stem for s in FIXTURES
                  if _refused(s.stem, name) is None and wanted <= {it.command for it in load_plan(s).mission}]
         assert taken, f"{name} takes no fixture with ROI, gimbal and camera items"

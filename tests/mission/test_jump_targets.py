@@ -35,7 +35,9 @@ def _collapsed(seqs: list[int]) -> list[int]:
     return [s for i, s in enumerate(seqs) if i == 0 or seqs[i - 1] != s]
 
 
-@pytest.mark.parametrize("name", BUILTIN_PROFILES)
+# (inav: it ignores the _INT mission messages, which the reference GCS does not fall back from
+# yet, and stores no DO_JUMP: its mission commands are NAV_WAYPOINT and RTL)
+@pytest.mark.parametrize("name", [n for n in BUILTIN_PROFILES if not load_profile(n).int_messages_ignored])
 def test_the_jump_lands_on_the_plans_target_when_flown(name: str) -> None:
     profile = load_profile(name)
     home = 1 if profile.behaviour.home_at_seq0 else 0

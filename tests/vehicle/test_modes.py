@@ -7,7 +7,7 @@ import pytest
 
 from mavconform.reference_impl.mission.constants import Cmd
 from mavconform.reference_impl.mission.constants import CommandResult as R
-from mavconform.reference_impl.profiles import BUILTIN_PROFILES
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 from mavconform.reference_impl.wire.dialect import mavlink as d
 
 from .pilot import ARMED, BARE_WAYPOINTS, Pilot
@@ -27,6 +27,7 @@ IDENTITY = {
     "ardupilot": (d.MAV_TYPE_QUADROTOR, d.MAV_AUTOPILOT_ARDUPILOTMEGA, 0),          # STABILIZE
     "ardupilot-plane": (d.MAV_TYPE_FIXED_WING, d.MAV_AUTOPILOT_ARDUPILOTMEGA, 0),   # MANUAL
     "ardupilot-rover": (d.MAV_TYPE_GROUND_ROVER, d.MAV_AUTOPILOT_ARDUPILOTMEGA, 0),  # MANUAL
+    "inav": (d.MAV_TYPE_QUADROTOR, d.MAV_AUTOPILOT_GENERIC, 0),   # custom_mode not modelled (inav.toml)
 }
 
 
@@ -83,7 +84,9 @@ HANDLED = [Cmd.DO_SET_MODE, Cmd.COMPONENT_ARM_DISARM, Cmd.MISSION_START, Cmd.NAV
            Cmd.NAV_RETURN_TO_LAUNCH, Cmd.NAV_LAND, Cmd.NAV_VTOL_LAND, Cmd.REQUEST_MESSAGE, Cmd.GET_HOME_POSITION]
 
 
-@pytest.mark.parametrize("name", sorted(IDENTITY))
+# (inav: COMMAND_LONG is ignored, as INAV 9.1 has no handler for it: tests/profiles/test_inav_profile.py)
+@pytest.mark.parametrize("name", [n for n in sorted(IDENTITY)
+                                  if "COMMAND_LONG" not in load_profile(n).config.ignored_messages])
 def test_any_params_as_command_long_or_command_int_get_one_answer(name):
     """Fuzzers and careless GCSs send NaN, infinities and huge values: every command the
     autopilot handles is answered, once, whatever its params, in either command message."""

@@ -9,7 +9,7 @@ import pytest
 
 from mavconform.reference_impl.mission.constants import Cmd
 from mavconform.reference_impl.mission.constants import CommandResult as R
-from mavconform.reference_impl.profiles import BUILTIN_PROFILES
+from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 from mavconform.reference_impl.wire.dialect import mavlink as d
 
 from .pilot import Pilot
@@ -19,7 +19,9 @@ def homes(p: Pilot) -> list:
     return [x for x in p.gcs.received if x.get_type() == "HOME_POSITION"]
 
 
-@pytest.mark.parametrize("name", BUILTIN_PROFILES)
+# (inav: COMMAND_LONG is ignored, as INAV 9.1 has no handler for it: tests/profiles/test_inav_profile.py)
+@pytest.mark.parametrize("name", [n for n in BUILTIN_PROFILES
+                                  if "COMMAND_LONG" not in load_profile(n).config.ignored_messages])
 def test_every_vehicle_says_where_its_home_is_when_asked(name):
     p = Pilot(name)
     home = p.vehicle.config.home

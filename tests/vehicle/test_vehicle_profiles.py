@@ -22,7 +22,7 @@ from ..profiles.profile_files import write_profile
 from .pilot import BARE_WAYPOINTS, Pilot
 
 VEHICLE_PROFILES = ("px4-fixedwing", "px4-vtol", "ardupilot-plane", "ardupilot-rover")
-VARIANT = re.compile(r"^(HB|[APL]\d+'?)$")
+VARIANT = re.compile(r"^(HB|[APLI]\d+'?)$")   # I: INAV's rows
 SOURCE_LINE = re.compile(r"\S+\.(cpp|h|c|parm|toml|xml)|rc\.\w+|\w+\.h\b|init\.d")
 
 
