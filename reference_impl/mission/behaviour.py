@@ -89,6 +89,10 @@ class ServerBehaviour:
     error_ack_ends_upload: bool = True
     # The MISSION_ACK a GCS gets when another GCS's transfer holds the plan type.
     busy_reply: MissionResult = MissionResult.DENIED
+    # A transfer belongs to the GCS that opened it (others get `busy_reply`). False: a
+    # transfer has no owner: any GCS's message acts on it and the replies go to whoever
+    # spoke last (INAV 9.1 keeps two counters and answers the sender).
+    transfer_owner: bool = True
     # MISSION_REQUEST_LIST for a mission_type that is no plan type is answered MISSION_COUNT 0
     # (False: MISSION_ACK UNSUPPORTED).
     unknown_type_count0: bool = False

@@ -542,6 +542,8 @@ class MissionServer:
         if refused is not None:
             return None, refused  # type: ignore[return-value]
         slot = self._slots[t]
+        if not self.behaviour.transfer_owner and slot.state is not SlotState.IDLE:
+            slot.partner = src   # no owner: the transfer answers whoever spoke last
         if self._busy_with_other(slot, src) or (
                 read and slot.state is SlotState.RECEIVING and self.behaviour.deny_reads_during_upload):
             return slot, self._deny(t, src)

@@ -292,6 +292,8 @@ _KNOBS = (
     Knob("count0_opens_upload", BEHAVIOUR, "count0_opens_upload", _bool,
          "MISSION_COUNT 0 is answered with a MISSION_REQUEST for item 0, which is then the last "
          "(false: it clears the plan, ACCEPTED)"),
+    Knob("transfer_owner", BEHAVIOUR, "transfer_owner", _bool,
+         "a transfer belongs to the GCS that opened it (false: any GCS's message acts on it, replies go to the sender)"),
     Knob("upload_timers", BEHAVIOUR, "upload_timers", _bool,
          "the vehicle times an upload (re-requests, gives up); false: no timer at all, a stalled upload "
          "is never re-requested and never ended"),
