@@ -252,8 +252,9 @@ JUDGES: dict[str, Judged] = {
     "item0_clears_plan": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
     "count0_opens_upload": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
     "upload_timers": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
-    "transfer_owner": fails("MIS.GCS.01", why="with no owner a second GCS's MISSION_COUNT restarts the upload "
-                            "instead of being DENIED", example=False),
+    "transfer_owner": fails("MIS.GCS.01", "MIS.GCS.02", example=False,
+                            why="with no owner a second GCS's MISSION_COUNT restarts the upload instead of "
+                                "being DENIED, and the first GCS's upload is lost"),
     "command_frames": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
     "autocontinue_required": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
     "single_peer_link": unjudged(
