@@ -82,6 +82,14 @@ def known_plans(in_process: bool) -> dict[MissionType, list]:
     return {t: plans.plan(t, variant=PLAN_VARIANT) for t in types}
 
 
+def _float_only(uri: TargetUri, profile: str | None) -> bool:
+    """Does the target (its builtin profile, or --profile's) ignore the _INT mission messages
+    (INAV 9.1)? Then the oracle GCS reads plans with MISSION_REQUEST."""
+    from mavconform.reference_impl.profiles import load_profile
+    name = uri.name if uri.kind == "builtin" and uri.name != "spec" else None if uri.in_process else profile
+    return name is not None and load_profile(name).int_messages_ignored
+
+
 class _Station:
     """The oracle GCS plus the fuzzer's outbox, as one datagram node.
 
@@ -189,7 +197,8 @@ class Rig:
         self.frames_sent = 0
         self.datagrams_sent = 0
         gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],
-                               signing=SigningKey(self.key) if self.key else None)
+                               signing=SigningKey(self.key) if self.key else None,
+                               download_int=not _float_only(uri, profile))
         wall = self.clock.wall
         if uri.in_process:
             keyed = {"signing": SigningKey(self.key), "require_signature": True} if self.key else {}
@@ -199,7 +208,7 @@ class Rig:
             self.counted = _Counted(self.guard)
             gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],
                                    target=(self.vehicle.config.system, self.vehicle.config.component),
-                                   signing=gcs_config.signing)
+                                   signing=gcs_config.signing, download_int=gcs_config.download_int)
         self.gcs = GcsNode(gcs_config, wall_clock=wall)
         if virtual:
             self.driver: Any = SimNetwork(seed, self.clock)
