@@ -124,6 +124,22 @@ def check_a_stalled_upload_is_never_rerequested_nor_ended(without=()):
     assert summary(p.send(wp(1))) == [(ACK, R.ACCEPTED, 0)]
 
 
+def check_a_second_gcs_takes_an_upload_over(without=()):
+    """No owner (mavlink.c:1036-1051): another GCS's MISSION_COUNT restarts the upload for it,
+    no DENIED, and the first GCS's next item is out of sequence; replies go to the sender."""
+    from mavconform.reference_impl.wire.frame import Frame
+    server = probe(without).vehicle.server
+
+    def from_gcs(system: int, message) -> list[tuple]:
+        sends = server.handle(Frame(message, b"\xfd", system, 190), 0.0)   # a MAVLink 2 frame
+        return [(x.msg.get_type(), getattr(x.msg, "seq", getattr(x.msg, "type", None)), x.to) for x in sends]
+    items = waypoints(3)
+    assert from_gcs(255, count(3)) == [(REQ, 0, (255, 190))]
+    assert from_gcs(42, count(3)) == [(REQ, 0, (42, 190))]
+    assert from_gcs(42, items[0]) == [(REQ, 1, (42, 190))]
+    assert from_gcs(255, items[0]) == [(ACK, R.INVALID_SEQUENCE, (255, 190))]
+
+
 # --- 6. sequence errors -------------------------------------------------------------------------
 def check_out_of_sequence_and_duplicate_items_get_invalid_sequence(without=()):
     p = probe(without)
@@ -251,6 +267,7 @@ CHECKS = {
     "atomic_upload": [check_item0_clears_the_plan_and_an_abandoned_upload_stays_partial],
     "item0_clears_plan": [check_item0_clears_the_plan_and_an_abandoned_upload_stays_partial],
     "upload_timers": [check_a_stalled_upload_is_never_rerequested_nor_ended],
+    "transfer_owner": [check_a_second_gcs_takes_an_upload_over],
     "out_of_sequence_reply": [check_out_of_sequence_and_duplicate_items_get_invalid_sequence],
     "rerequest_gap": [check_out_of_sequence_and_duplicate_items_get_invalid_sequence],
     "nack_ends_upload": [check_a_refused_item_can_be_sent_again_corrected],
