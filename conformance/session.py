@@ -141,6 +141,7 @@ class Session:
         self.link_facts = link_facts("in-process" if uri.in_process else uri.kind, self.stream)
         self.t = Tester(node, self.driver, scale=scale)
         self.t.link_allowance = self.link_facts["reply_allowance_s"]
+        self.t.int_forms = not self._profile_ignores_int()   # the forms probe may still find out
         record_traffic(self.t)
 
     # --- lifecycle ------------------------------------------------------------------------
@@ -180,6 +181,16 @@ class Session:
         if self.on_identity is not None:
             self.on_identity(self.identity)
         return self.identity
+
+    def _profile_ignores_int(self) -> bool:
+        """Does the target's profile (its builtin vehicle's, or --profile's) say it ignores
+        the _INT mission messages (INAV 9.1)?"""
+        if self.vehicle is not None:
+            return bool({"MISSION_ITEM_INT", "MISSION_REQUEST_INT"} & self.vehicle.config.ignored_messages)
+        if self.uri.profile is None:
+            return False
+        from mavconform.reference_impl.profiles import load_profile
+        return load_profile(self.uri.profile).int_messages_ignored
 
     def _profile_form(self) -> Any:
         """The stored form `--profile` says the external target keeps, or None."""

@@ -48,25 +48,33 @@ def widen(match: Match) -> Match:
 
 
 def probe(t: Any) -> str:
-    """Does the target answer MISSION_REQUEST_INT? If not, but it answers MISSION_REQUEST,
-    mark every tester float-only (`int_forms` False). One download of the mission plan,
-    ended with a MISSION_ACK; the line says what was found."""
+    """Does the target answer MISSION_REQUEST_INT for an item it holds? If not, but it
+    answers MISSION_REQUEST with that MISSION_ITEM, mark the tester float-only (`int_forms`
+    False). Only an item decides: a request beyond the list is a stray that some targets
+    answer in one form and not the other (MAVSDK's server). With no item to ask for, what the
+    profile says stands (`--profile inav`, builtin:inav: the session starts float-only). The
+    line says what was found."""
     from . import procedures   # (procedures imports the tester, which imports this module)
     t.mark()
     count = procedures.open_download(t, MissionType.MISSION, resends=1)
     if count is None:
         return "forms probe: no MISSION_COUNT (the clauses judge that)"
-    answer = msg(("MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK"))
+    if count.msg.count == 0:
+        t.send(m.ack_message(0, MissionType.MISSION, t.target))
+        kept = "the float forms, as its profile says" if not t.int_forms else "the _INT forms"
+        return f"forms probe: undecided (the target holds no item to ask for): the clauses use {kept}"
+    item0 = msg(("MISSION_ITEM_INT", "MISSION_ITEM"), seq=0)
     t.send(m.request_message(0, MissionType.MISSION, t.target, as_int=True))
-    said = None
-    if t.poll_for(answer, t.timings.default_timeout) is None:
+    said = "forms probe: MISSION_REQUEST_INT answered"
+    if t.poll_for(item0, t.timings.default_timeout) is None:
         t.send(m.request_message(0, MissionType.MISSION, t.target, as_int=False))
-        if t.poll_for(answer, t.timings.default_timeout) is not None:
+        if t.poll_for(item0, t.timings.default_timeout) is not None:
             t.int_forms = False
             said = ("forms probe: MISSION_REQUEST_INT got no reply, MISSION_REQUEST did: the target "
                     "answers only the float forms, so the clauses use MISSION_ITEM / MISSION_REQUEST "
-                    f"(except {', '.join(sorted(JUDGES_INT_FORMS))}, which judge the _INT forms)")
+                    f"(except {', '.join(sorted(JUDGES_INT_FORMS))}, which judges the _INT forms)")
         else:
-            said = "forms probe: neither MISSION_REQUEST_INT nor MISSION_REQUEST got a reply (the clauses judge that)"
+            said = "forms probe: neither MISSION_REQUEST_INT nor MISSION_REQUEST got item 0 (the clauses judge that)"
     t.send(m.ack_message(0, MissionType.MISSION, t.target))
-    return said or "forms probe: MISSION_REQUEST_INT answered"
+    return said
+

@@ -125,12 +125,17 @@ def form_of_behaviour(behaviour: Any, basis: str) -> StoredForm:
     return StoredForm(behaviour.home_at_seq0, behaviour.item_storage, basis)
 
 
+GENERIC_AUTOPILOT = 0   # MAV_AUTOPILOT_GENERIC
+
+
 def profile_for_target(autopilot: int | None, mav_type: int | None = None) -> str | None:
     """The builtin profile that models what a HEARTBEAT names (None: the spec): the one of
     that autopilot for that class of vehicle (a VTOL without one of its own: the fixed-wing
     one, whose stored form it shares), else the autopilot's first profile. The profiles'
-    own `autopilot` and `vehicle_type` knobs say what each models: one place."""
-    if autopilot is None:
+    own `autopilot` and `vehicle_type` knobs say what each models: one place. A generic
+    autopilot (0) names nothing: the spec, unless `--profile` says what it is (INAV says 0,
+    and so do MAVSDK's server and most others)."""
+    if autopilot is None or autopilot == GENERIC_AUTOPILOT:
         return None
     from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
     wanted = vehicle_class(mav_type)

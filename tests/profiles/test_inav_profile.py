@@ -330,3 +330,12 @@ def test_the_float32_storage_matches_the_sitls_numbers() -> None:
     the float32 sent; z = 10.129 as 1012 cm."""
     assert to_float32(to_float32(LAT) * 1e7) == 473977440.0
     assert math.trunc(to_float32(to_float32(10.129) * 100.0)) == 1012
+
+
+def test_a_generic_autopilot_is_not_taken_for_inav():
+    """INAV's HEARTBEAT says MAV_AUTOPILOT_GENERIC, as MAVSDK's server and most others do: the
+    profile is named with --profile, never guessed from autopilot 0 (it gave MAVSDK INAV's
+    float32 stored form and eight false failures)."""
+    from mavconform.conformance.harness.stored_form import SPEC_FORM, form_for_target, profile_for_target
+    assert load_profile("inav").config.autopilot == 0
+    assert profile_for_target(0, 2) is None and form_for_target(0, 2) == SPEC_FORM
