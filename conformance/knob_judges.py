@@ -68,6 +68,10 @@ def unjudged(why: str, example: Any = None) -> Judged:
     return Judged({}, why, (), example)
 
 
+_INAV_ONLY = ("not run in the matrix: only the inav profile sets it, and the matrix leaves that profile "
+              "out (see ignored_messages); tests/profiles/test_inav_profile.py checks its answers")
+
+
 # The autopilot side of a vehicle, one unit: the HEARTBEAT's autopilot picks the suite's flight
 # style (harness/flight_styles.py), which only flies a vehicle whose modes, arming and start
 # are that autopilot's; so each of these is tried together with every other one the profile sets.
@@ -242,21 +246,25 @@ JUDGES: dict[str, Judged] = {
                                  "Mission Protocol does not read"),
     "custom_mode_mission": unjudged("HEARTBEAT identity: the autopilot's own mode number, which the "
                                     "Mission Protocol does not read"),
-    # --- INAV 9.1 (the inav profile; the suite cannot drive a vehicle that ignores the _INT
-    # messages yet, so these rows are not run on it: tests/profiles/test_knob_matrix.py) ---
+    # --- INAV 9.1 (the inav profile). The knob matrix leaves the one profile that sets these
+    # out (Profile.int_messages_ignored: its transfers go through the tester's float-form
+    # fallback, which the matrix's example runs do not take), so these rows are not run
+    # there; builtin:inav is run whole against expectations/inav.toml (the self-check), and
+    # each knob's answers are checked in tests/profiles/test_inav_profile.py ---
     "ignored_messages": unjudged(
-        "a vehicle that ignores MISSION_ITEM_INT / MISSION_REQUEST_INT leaves the suite's _INT transfers "
-        "unanswered (ERROR, not FAIL) until the tester falls back to MISSION_ITEM / MISSION_REQUEST"),
-    "mission_type_ignored": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
-    "target_system_only": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
-    "item0_clears_plan": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
-    "count0_opens_upload": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
-    "upload_timers": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
+        "a vehicle that ignores MISSION_ITEM_INT / MISSION_REQUEST_INT: the tester falls back to "
+        "MISSION_ITEM / MISSION_REQUEST (float_forms.py) and MIS.DN.02 fails; not run in the matrix (above)"),
+    "mission_type_ignored": unjudged(_INAV_ONLY),
+    "target_system_only": unjudged(_INAV_ONLY),
+    "item0_clears_plan": unjudged(_INAV_ONLY),
+    "count0_opens_upload": unjudged(_INAV_ONLY),
+    "upload_counters_persist": unjudged(_INAV_ONLY),
+    "upload_timers": unjudged(_INAV_ONLY),
     "transfer_owner": fails("MIS.GCS.01", "MIS.GCS.02", example=False,
                             why="with no owner a second GCS's MISSION_COUNT restarts the upload instead of "
                                 "being DENIED, and the first GCS's upload is lost"),
-    "command_frames": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
-    "autocontinue_required": unjudged("not run yet: only the inav profile sets it (see ignored_messages)"),
+    "command_frames": unjudged(_INAV_ONLY),
+    "autocontinue_required": unjudged(_INAV_ONLY),
     "single_peer_link": unjudged(
         "how GCSs reach the vehicle (L1, L2): the session's second GCS shares the first one's "
         "socket, as a real SITL link needs"),

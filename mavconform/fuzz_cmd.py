@@ -48,8 +48,12 @@ with NAME.mcap (the capture of its replay); `mavconform fuzz --replay FINDINGS/N
 runs it again. The campaign also writes fuzz.json / .junit.xml / .md / .html to --report-dir,
 one row per invariant.
 
-A real target (udp:, udpin:) is judged by the rules of --profile, by default the builtin
-profile of the autopilot its HEARTBEAT names (px4, ardupilot; else the spec). A target that
+A real target (udp:, udpin:, tcp:, tcpin:, serial:) is judged by the rules of --profile, by
+default the builtin profile of the autopilot its HEARTBEAT names (px4, ardupilot; else the
+spec; INAV says "generic": give --profile inav). In protocol mode the profile also sets what
+is fuzzed: a plan type, message or operation it documents the vehicle does not have (INAV:
+fence and rally, the _INT forms, set-current, empty uploads) is left out, and the header
+says so (fuzz/protocol/scope.py). A target that
 stops answering is a target-crash (no HEARTBEAT either) or target-hang finding: the campaign
 stops and saves the last steps with the capture of the live traffic. Replaying and
 minimising it needs the target restarted: give --restart-cmd, run (bounded) before every
@@ -155,6 +159,9 @@ def _campaign(args: argparse.Namespace) -> int:
     control = ", operator control on (--operator-control)" if args.handover else ""
     print(f"mavconform fuzz: {args.mode} mode against {args.target}{control}, seed {args.seed}, "
           f"budget {budget}", flush=True)
+    scope = _scope(args) if args.mode == "protocol" else None
+    if scope is not None and not scope.whole:
+        print(f"  fuzzed: {scope.describe()}", flush=True)
     unit = "steps" if args.mode == "protocol" else "frames"
     bar = None if args.quiet else ProgressLine(unit, sys.stderr)
     try:
@@ -243,6 +250,15 @@ def _replay(args: argparse.Namespace) -> int:
     if args.capture:
         print(f"  capture: {args.capture}")
     return 1
+
+
+def _scope(args: argparse.Namespace):
+    """The protocol fuzzer's scope where it is known before the search (a builtin target's
+    profile, or --profile); a remote target's comes from its HEARTBEAT later."""
+    from mavconform.fuzz.protocol.world import profile_from
+    uri = parse_target(args.target)
+    name = args.profile if args.profile else uri.name if uri.kind == "builtin" else None
+    return None if name is None else profile_from(name, f"profile {name}").scope
 
 
 def _writable(option: str, folder: str) -> None:

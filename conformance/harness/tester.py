@@ -349,11 +349,14 @@ class Tester:
                               silent=f"{self.now() - heard:.1f}"))
 
     def last_seen(self) -> str:
-        """The last mission message received since the floor, for a verdict's detail."""
+        """The last mission message received since the floor, for a verdict's detail.
+
+        A STATUSTEXT is not one: INAV repeats "UNABLE TO ARM" every few seconds, and naming
+        it would hide the protocol message the target last sent (it stays in the exchange)."""
         inbox = self.node.inbox
         for i in range(len(inbox) - 1, self._floor - 1, -1):
             frame = inbox[i][1]
-            if relevant(frame.msg._type):
+            if relevant(frame.msg._type) and frame.msg._type != "STATUSTEXT":
                 return f"last mission message: {_describe(frame)}"
         return "no mission message arrived"
 

@@ -65,7 +65,7 @@ from __future__ import annotations
 
 from bisect import bisect_right
 from collections import deque
-from typing import Callable, Iterable
+from typing import Any, Callable, Iterable
 
 from mavconform.reference_impl.wire.codec import FrameDecoder
 from mavconform.reference_impl.wire.cparser import OK, PARSE_CHAR, VARIANTS, CParser, MessageTable, ParsedFrame
@@ -96,7 +96,25 @@ def _target_table() -> MessageTable:
 
 
 TARGET_TABLE = _target_table()
-_INERT_IDS = frozenset(mid for mid, (name, _) in TARGET_TABLE.entries.items() if name in INERT)
+
+
+def inert_messages(behaviour: Any, ignored: frozenset[str] = frozenset()) -> frozenset[str]:
+    """INERT for a vehicle of this profile. A stray item is inert where an upload ends (a
+    timer, a GCS's cancel) and is applied whole: INAV 9.1 has neither (VARIANTS I6, I7):
+    its upload counters outlive the upload, so after MISSION_COUNT 3 and three items a
+    stray MISSION_ITEM seq 3 is appended, and after any MISSION_COUNT an item 0 replaces
+    the plan (a 4-minute campaign against its SITL found "1 item instead of 3" so)."""
+    returns_to_idle = behaviour.upload_timers and "MISSION_ACK" not in ignored
+    if behaviour.atomic_upload or returns_to_idle:
+        return INERT
+    return INERT - {"MISSION_ITEM", "MISSION_ITEM_INT"}
+
+
+def _ids(names: frozenset[str]) -> frozenset[int]:
+    return frozenset(mid for mid, (name, _) in TARGET_TABLE.entries.items() if name in names)
+
+
+_INERT_IDS = _ids(INERT)
 
 # The stream models: the C parser's variants, grouped while they are in the same state (they
 # part only on rare frames: see CParser.diverged), so each datagram is parsed once per group.
@@ -107,8 +125,11 @@ class Admission:
     """Decodes each datagram as the target would and neutralises what must not go out."""
 
     def __init__(self, key: bytes | None, require_signature: bool,
-                 wall_clock: Callable[[], float], *, variants: Iterable[str] = VARIANTS) -> None:
+                 wall_clock: Callable[[], float], *, variants: Iterable[str] = VARIANTS,
+                 inert: frozenset[str] = INERT) -> None:
         self.key = key
+        self.inert = inert
+        self._inert_ids = _INERT_IDS if inert == INERT else _ids(inert)
         self.wall_clock = wall_clock
         self.decoder = FrameDecoder(signing=SigningKey(key) if key is not None else None,
                                     wall_clock=wall_clock)
@@ -224,7 +245,7 @@ class Admission:
         out = []
         pos = 0
         for item in decoder.feed(data):
-            if item.__class__ is Frame and item.msg._type not in INERT and self.accepts(item):
+            if item.__class__ is Frame and item.msg._type not in self.inert and self.accepts(item):
                 at = pos + wire.crc_offset(item.raw)
                 if already is not None and at in already:
                     at += 1
@@ -242,7 +263,7 @@ class Admission:
         variant.)"""
         trial: Models = []
         hits: list[tuple[ParsedFrame, int]] = []
-        inert = _INERT_IDS
+        inert = self._inert_ids
         for variants, m in models:
             t = m.copy()
             base = t.offset
@@ -258,11 +279,11 @@ class Admission:
                 trial.append((variants, t))
                 continue
             # a frame the variants part on: the others parse on their own from here
-            _offending(frames, t, base, hits)
+            _offending(frames, t, base, hits, inert)
             trial.append((variants[:1], t))
             for v in variants[1:]:
                 tv = m.copy()
-                _offending(tv.feed(data, v), tv, base, hits)
+                _offending(tv.feed(data, v), tv, base, hits, inert)
                 trial.append(((v,), tv))
         if len(trial) > 1:
             trial = _merged(trial)
@@ -303,7 +324,7 @@ class Admission:
             for v in variants:
                 for f in m.copy().feed(datagram, v):
                     done.append(f)
-                    if f.result == OK and f.start < base and f.msgid not in _INERT_IDS:
+                    if f.result == OK and f.start < base and f.msgid not in self._inert_ids:
                         self.leaked += 1
         self._wire = wire_models
         if queue:
@@ -353,12 +374,12 @@ def _crc_byte(frame: ParsedFrame, base: int, n: int, flipped: set[int]) -> int |
 
 
 def _offending(frames: list[ParsedFrame], model: CParser, base: int,
-               hits: list[tuple[ParsedFrame, int]]) -> None:
+               hits: list[tuple[ParsedFrame, int]], inert: frozenset[int]) -> None:
     for f in frames:
-        if f.result == OK and f.msgid not in _INERT_IDS:
+        if f.result == OK and f.msgid not in inert:
             hits.append((f, base))
     p = model.awaiting_signature()
-    if p is not None and p.msgid not in _INERT_IDS:
+    if p is not None and p.msgid not in inert:
         hits.append((p, base))
 
 

@@ -58,7 +58,7 @@ from mavconform.reference_impl.session import GcsSession
 from mavconform.reference_impl.vehicle import VehicleNode
 from mavconform.reference_impl.wire.signing import SigningKey
 
-from .admission import Admission
+from .admission import INERT, Admission, inert_messages
 from .mutators import MutationContext
 from .program import Builder
 
@@ -258,16 +258,19 @@ class Rig:
             return Violation("target-crash", f"no HEARTBEAT from {self.uri} within "
                              f"{DISCOVERY_WAIT * self.scale:g} s, before any fuzz frame was sent")
         self._target = self.gcs.target
+        inert = INERT
         if self.vehicle is not None:
             self.form = form_of_behaviour(self.vehicle.config.behaviour, str(self.uri))
+            inert = inert_messages(self.vehicle.config.behaviour, self.vehicle.config.ignored_messages)
         elif self.profile is not None:
             from mavconform.reference_impl.profiles import load_profile
-            self.form = form_of_behaviour(load_profile(self.profile).behaviour,
-                                          f"profile {self.profile} (--profile)")
+            profile = load_profile(self.profile)
+            self.form = form_of_behaviour(profile.behaviour, f"profile {self.profile} (--profile)")
+            inert = inert_messages(profile.behaviour, profile.config.ignored_messages)
         else:
             heartbeat = self.gcs.target_heartbeat
             self.form = form_for_target(getattr(heartbeat, "autopilot", None), getattr(heartbeat, "type", None))
-        admission = Admission(self.key, self.key is not None, self._ctx.wall_clock)
+        admission = Admission(self.key, self.key is not None, self._ctx.wall_clock, inert=inert)
         self.builder = Builder(self._target, self._ctx, admission, sign_frames=self.key is not None)
         station.admission = admission        # from now on every datagram to the target is fed to it
         for t, items in list(self.plans.items()):

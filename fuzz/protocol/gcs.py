@@ -81,6 +81,7 @@ class FuzzGcs:
         self.answer: Decision | None = None              # the owner's answer to a forwarded request
         self.silent_until = 0.0                          # no HEARTBEAT before this (GCS loss)
         self.items_sent = 0                              # MISSION_ITEM(_INT)s sent since `listen()`
+        self.float_only = False                          # the target reads no _INT forms (INAV)
         self.results: list[OperationResult] = []
         self.heard: list[Any] = []          # messages from the target since `listen()`
         self.listening = False
@@ -115,11 +116,13 @@ class FuzzGcs:
         MISSION_REQUEST_INT with MISSION_ITEM too."""
         client = self._client()
         self._rewrite = rewrite
-        client.upload_int = not as_float
+        client.upload_int = not (as_float or self.float_only)
         self._run(client.upload(mission_type, items, now))
 
     def download(self, mission_type: MissionType, now: float) -> None:
-        self._run(self._client().download(mission_type, now))
+        client = self._client()
+        client.download_int = not self.float_only
+        self._run(client.download(mission_type, now))
 
     def clear(self, mission_type: MissionType, now: float) -> None:
         self._run(self._client().clear(mission_type, now))

@@ -168,6 +168,9 @@ class Runner:
         """Run one step; a violation seen while it ran (results, idleness) is returned."""
         self.index += 1
         self.step_started = self.world.now()
+        step = self.world.profile.scope.adapt(step)
+        if step is None:   # about what the profile says the target does not have
+            return None
         kind = step.get("op")
         handler: Callable[[dict[str, Any]], _Group | Violation | None] = {
             "upload": self._operation, "download": self._operation, "clear": self._operation,

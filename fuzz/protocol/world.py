@@ -52,6 +52,7 @@ from .connection import TargetConnection
 from .control import HANDOVER_CONTROL, ControlRules, ControlWatch, WireControl
 from .faults import install
 from .gcs import FuzzGcs
+from .scope import Scope
 
 SYSTEM_A, SYSTEM_B, SYSTEM_PROBE, SYSTEM_MUTE, COMPONENT = 245, 246, 247, 248, 190
 NAMES = {SYSTEM_A: "GCS A", SYSTEM_B: "GCS B", SYSTEM_PROBE: "the probe GCS", SYSTEM_MUTE: "the mute GCS"}
@@ -71,18 +72,22 @@ class Profile:
     retry_cap: bool = True            # False: retries end on a protocol timeout (PX4, P3)
     form: StoredForm = SPEC_FORM      # how it stores plans (home in slot 0, compact items)
     basis: str = "the spec"
+    scope: Scope = Scope()            # the part of the protocol it has (fuzz.protocol.scope)
 
 
-def rules_of(behaviour: Any, basis: str) -> Profile:
-    """The oracle rules a vehicle behaviour (a profile's knobs) implies."""
+def rules_of(behaviour: Any, basis: str, ignored: frozenset[str] = frozenset()) -> Profile:
+    """The oracle rules a vehicle behaviour (a profile's knobs) and the messages it never
+    reads imply."""
     return Profile(atomic=behaviour.atomic_upload, timings=behaviour.timings,
-                   retry_cap=behaviour.retry_cap, form=form_of_behaviour(behaviour, basis), basis=basis)
+                   retry_cap=behaviour.retry_cap, form=form_of_behaviour(behaviour, basis), basis=basis,
+                   scope=Scope.of(behaviour, ignored, basis))
 
 
 def profile_from(name_or_file: str, basis: str) -> Profile:
     """The oracle rules of a vehicle profile (builtin name or TOML file)."""
     from mavconform.reference_impl.profiles import load_profile
-    return rules_of(load_profile(name_or_file).behaviour, basis)
+    profile = load_profile(name_or_file)
+    return rules_of(profile.behaviour, basis, profile.config.ignored_messages)
 
 
 def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | None = None,
@@ -93,7 +98,7 @@ def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | No
     if uri.kind == "mutant":
         return Profile()
     if vehicle is not None:
-        return rules_of(vehicle.server.behaviour, f"the {uri} profile")
+        return rules_of(vehicle.server.behaviour, f"the {uri} profile", vehicle.config.ignored_messages)
     if chosen is not None:
         return profile_from(chosen, f"profile {chosen} (--profile)")
     name = profile_for_target(autopilot, mav_type)
@@ -128,6 +133,8 @@ class World:
         mav_type = self.connection.mav_type if self.connection is not None else None
         base = profile_for(self.uri, self.vehicle, chosen=profile, autopilot=autopilot, mav_type=mav_type)
         self.profile = base if atomic is None else dataclasses.replace(base, atomic=atomic)
+        for gcs in (self.a, self.b, self.probe, self.mute):
+            gcs.float_only = self.profile.scope.float_only
 
     # --- time and running -----------------------------------------------------------------
     def now(self) -> float:
@@ -174,7 +181,9 @@ class World:
         return None if self.vehicle is None else self.vehicle.store.items(t)
 
     def vehicle_idle(self) -> bool:
-        return self.vehicle is None or self.vehicle.server.is_idle()
+        """In-process only; a vehicle whose profile has no way back to idle (no upload timers,
+        a GCS's cancel unread: INAV) is not held to it."""
+        return self.vehicle is None or not self.profile.scope.returns_to_idle or self.vehicle.server.is_idle()
 
     def quiet(self) -> bool:
         """Nothing in flight (virtual time; over UDP in-flight datagrams cannot be seen)."""

@@ -66,6 +66,10 @@ class ServerBehaviour:
     # then the last (its ACCEPTED replaces the plan with that one item). False (seed 000):
     # an empty upload clears the plan at once with ACCEPTED.
     count0_opens_upload: bool = False
+    # The upload's item counter outlives the upload: an item that arrives with none running
+    # is taken if its seq is the counter's (after an upload of n items: seq n, appended;
+    # INAV 9.1, upload_counters.py); any other seq is answered INVALID_SEQUENCE.
+    upload_counters_persist: bool = False
     # An item the vehicle refuses ends the upload (seed 000: errors are unrecoverable).
     # False: the error ACK is sent and the vehicle goes on requesting.
     nack_ends_upload: bool = True

@@ -36,6 +36,7 @@ from .items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
 from .progress import MissionProgress
 from .store import STORAGE_FORMS, MissionStore
 from .transitions import ALL_SERVER_TRANSITIONS, SlotEvent, SlotState
+from .upload_counters import UploadCounters
 from .validation import first_defect
 
 
@@ -77,6 +78,7 @@ class ServerStats:
     downloads_served: int = 0  # downloads the GCS ended with a MISSION_ACK (any code)
     denied: int = 0
     stray: int = 0
+    stray_items_stored: int = 0   # upload_counters_persist: stray items the plan took
     history: list[tuple[MissionType, SlotState, SlotEvent, SlotState]] = field(default_factory=list)
 
 
@@ -106,6 +108,7 @@ class MissionServer:
         self._slots = {t: _Transfer(t) for t in PLAN_TYPES}
         self._slot_list = tuple(self._slots.values())
         self._last_accepted: dict[MissionType, _LastAccepted] = {}
+        self._counters = UploadCounters() if b.upload_counters_persist else None
         self._handlers = {
             "MISSION_COUNT": self._on_count,
             "MISSION_ITEM_INT": self._on_item,
@@ -192,6 +195,8 @@ class MissionServer:
         if count > self.behaviour.capacity.get(t, 0):
             self._move(slot, SlotEvent.COUNT_REJECTED)
             return [Send(m.ack_message(MissionResult.NO_SPACE, t, src), src)]
+        if self._counters is not None:
+            self._counters.opened(count)
         if count == 0 and not self.behaviour.count0_opens_upload:
             # Seed 000: an empty upload "has the same effect as clearing the mission".
             self._move(slot, SlotEvent.COUNT_ZERO)
@@ -256,6 +261,8 @@ class MissionServer:
             return out + self._reject(slot, defect.code, src)
         item = self._keep(item)
         slot.received.append(item)
+        if self._counters is not None:
+            self._counters.took(msg.seq)
         if not b.atomic_upload:   # written as it arrives (A2); item 0 clears the plan (item0_clears_plan)
             self._write(t, list(slot.received) if b.item0_clears_plan and not slot.partial
                         else self._spliced(t, item.seq, [item]))
@@ -506,6 +513,8 @@ class MissionServer:
         return [Send(m.ack_message(code, slot.mission_type, src), src)]
 
     def _stray_item(self, msg: Any, t: MissionType, src: Peer, now: float) -> list[Send]:
+        if self._counters is not None:
+            return self._continued_upload(msg, t, src)
         code = self.behaviour.foreign_type_item_reply
         if code is not None:
             running = next((s for s in self._slot_list if s.state is SlotState.RECEIVING
@@ -524,6 +533,26 @@ class MissionServer:
             if item is not None and item.seq < len(last.items) and item == last.items[item.seq]:
                 return [Send(m.ack_message(MissionResult.ACCEPTED, t, src, last.opaque_id), src)]
         return self._stray(t, src)
+
+    def _continued_upload(self, msg: Any, t: MissionType, src: Peer) -> list[Send]:
+        """An item with no upload running, on a vehicle whose upload counters outlive the
+        upload (upload_counters_persist, INAV 9.1: upload_counters.py)."""
+        item = m.item_from_message(msg)
+        if item is None:
+            return self._stray(t, src)
+        if self.behaviour.mission_type_ignored and item.mission_type is not t:
+            item = replace(item, mission_type=t)
+        defect = first_defect(item, self.behaviour.item_rules)
+        if defect is not None:
+            return [Send(m.ack_message(defect.code, t, src), src)]
+        stored = list(self.store.items(t))
+        verdict = self._counters.stray(item.seq, len(stored))
+        if verdict.store is not None:
+            self.stats.stray_items_stored += 1
+            self._write(t, [self._keep(item)] if verdict.store == "replace" else stored + [self._keep(item)])
+        if verdict.reply is None:
+            return [Send(m.request_message(verdict.request, t, src, as_int=self.behaviour.request_int), src)]
+        return [Send(m.ack_message(verdict.reply, t, src), src)]
 
     def _stray(self, t: MissionType, src: Peer) -> list[Send]:
         self.stats.stray += 1

@@ -292,6 +292,9 @@ _KNOBS = (
     Knob("count0_opens_upload", BEHAVIOUR, "count0_opens_upload", _bool,
          "MISSION_COUNT 0 is answered with a MISSION_REQUEST for item 0, which is then the last "
          "(false: it clears the plan, ACCEPTED)"),
+    Knob("upload_counters_persist", BEHAVIOUR, "upload_counters_persist", _bool,
+         "the upload's item counter outlives the upload: an item with none running is taken if its seq is "
+         "the counter's (after n items: seq n is appended, ACCEPTED); another seq is INVALID_SEQUENCE"),
     Knob("transfer_owner", BEHAVIOUR, "transfer_owner", _bool,
          "a transfer belongs to the GCS that opened it (false: any GCS's message acts on it, replies go to the sender)"),
     Knob("upload_timers", BEHAVIOUR, "upload_timers", _bool,

@@ -61,3 +61,18 @@ def test_a_wait_still_ends_on_the_frame_it_waits_for_amid_the_stream():
         later = t.collect(msg("HEARTBEAT"), 2.5)
         assert len(later) >= 2 and all(f.msg._type == "HEARTBEAT" for _, f in later)
         assert frame not in [f for _, f in later]   # consumed once
+
+
+def test_a_verdict_names_the_last_mission_message_not_a_later_statustext():
+    """INAV repeats "UNABLE TO ARM" every few seconds: the detail names the protocol message."""
+    from mavconform.reference_impl.mission import messages as m
+    from mavconform.reference_impl.mission.items import MissionType
+    from mavconform.reference_impl.wire.frame import Frame
+
+    with Session(parse_target("builtin:spec"), virtual=True) as session:
+        t = session.t
+        t.mark()
+        assert t.last_seen() == "no mission message arrived"
+        for message in (m.count_message(3, MissionType.MISSION, t.target), m.statustext_message(4, "UNABLE TO ARM")):
+            t.node.inbox.append((t.now(), Frame(message, b"", 1, 1)))
+        assert t.last_seen().startswith("last mission message: MISSION_COUNT{")

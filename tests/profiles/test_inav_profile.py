@@ -153,6 +153,16 @@ def check_out_of_sequence_and_duplicate_items_get_invalid_sequence(without=()):
     assert summary(p.send(items[2])) == [(ACK, R.ACCEPTED, 0)]
 
 
+def check_a_stray_item_continues_the_last_upload(without=()):
+    """Probed on the SITL: after 3 items, a stray item 3 was appended (ACCEPTED, then 4 listed);
+    a stray item 0 then drew INVALID_SEQUENCE and changed nothing."""
+    p = with_plan(3, without)
+    assert summary(p.send(waypoints(4)[3])) == [(ACK, R.ACCEPTED, 0)]
+    assert summary(p.send(request_list(0))) == [(COUNT, 4, 0)]
+    assert summary(p.send(waypoints(1)[0])) == [(ACK, R.INVALID_SEQUENCE, 0)]
+    assert summary(p.send(request_list(0))) == [(COUNT, 4, 0)]
+
+
 def check_items_after_a_finished_upload_get_invalid_sequence(without=()):
     p = with_plan(2, without)
     assert summary(p.send(waypoints(2)[1])) == [(ACK, R.INVALID_SEQUENCE, 0)]   # a late copy of the last
@@ -266,6 +276,7 @@ CHECKS = {
     "count0_opens_upload": [check_count0_requests_item0_and_keeps_the_plan_until_it_comes],
     "atomic_upload": [check_item0_clears_the_plan_and_an_abandoned_upload_stays_partial],
     "item0_clears_plan": [check_item0_clears_the_plan_and_an_abandoned_upload_stays_partial],
+    "upload_counters_persist": [check_a_stray_item_continues_the_last_upload],
     "upload_timers": [check_a_stalled_upload_is_never_rerequested_nor_ended],
     "transfer_owner": [check_a_second_gcs_takes_an_upload_over],
     "out_of_sequence_reply": [check_out_of_sequence_and_duplicate_items_get_invalid_sequence],
@@ -285,8 +296,13 @@ CHECKS = {
     "current_period": [check_heartbeat_and_no_mission_current],
     "item_reached_unreported": [check_no_item_reached_while_flown],
 }
-# taking a knob away takes what only works with it too
-NEEDS = {"atomic_upload": ("item0_clears_plan",)}
+# taking a knob away takes with it what only works with it, and what would give its answer anyway:
+# INAV's upload counters (upload_counters_persist) answer a stray item, a late copy and a corrected
+# item after a refusal as the SITL did, whatever the slot-based knobs say
+NEEDS = {"atomic_upload": ("item0_clears_plan", "upload_counters_persist"),
+         "nack_ends_upload": ("upload_counters_persist",),
+         "reack_last_item": ("upload_counters_persist",),
+         "idle_reply": ("upload_counters_persist",)}
 ALL_CHECKS = sorted({c for cs in CHECKS.values() for c in cs}, key=lambda c: c.__name__)
 PAIRS = [(k, c) for k, cs in CHECKS.items() for c in cs]
 

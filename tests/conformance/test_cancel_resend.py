@@ -1,0 +1,66 @@
+"""MIS.CAN.04 resends an unanswered MISSION_COUNT once, as a spec GCS does.
+
+Seen on INAV 9.1 SITL over TCP: once in five runs, the new MISSION_COUNT after a cancelled
+upload drew no answer at all, and the clause failed on a lost message it does not judge.
+"""
+
+from __future__ import annotations
+
+from mavconform.conformance.catalogue import CLAUSES
+from mavconform.conformance.mutants import MUTANTS, Mutant, server_mutant
+from mavconform.conformance.outcome import Outcome
+from mavconform.conformance.runner import run_clauses
+from mavconform.conformance.session import Session
+from mavconform.conformance.target_uri import parse_target
+from mavconform.reference_impl.mission.constants import MissionResult
+from mavconform.reference_impl.mission.server import MissionServer
+
+
+class _IgnoresCountsAfterCancel(MissionServer):
+    """After a GCS cancels an upload, ignores the next `ignored` MISSION_COUNTs."""
+
+    ignored = 1
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._to_ignore = 0
+
+    def _on_ack(self, msg, src, now):
+        if msg.type == MissionResult.OPERATION_CANCELLED:
+            self._to_ignore = self.ignored
+        return super()._on_ack(msg, src, now)
+
+    def _on_count(self, msg, src, now):
+        if self._to_ignore:
+            self._to_ignore -= 1
+            return []
+        return super()._on_count(msg, src, now)
+
+
+class _NeverAnswersCountsAfterCancel(_IgnoresCountsAfterCancel):
+    ignored = 1000
+
+
+def _can04(monkeypatch, server_cls: type[MissionServer]):
+    monkeypatch.setitem(MUTANTS, "test-only", Mutant("test-only", "", frozenset(), server_mutant(server_cls)))
+    clause = [c for c in CLAUSES if c.id == "MIS.CAN.04"]
+    with Session(parse_target("mutant:test-only"), virtual=True) as session:
+        return run_clauses(session, clause).results[0]
+
+
+def test_a_count_answered_at_once_is_not_resent():
+    with Session(parse_target("builtin:spec"), virtual=True) as session:
+        result = run_clauses(session, [c for c in CLAUSES if c.id == "MIS.CAN.04"]).results[0]
+    assert result.outcome is Outcome.PASS, result.detail
+    assert not any("resends it once" in str(e.get("msg", "")) for e in result.exchange), result.exchange
+
+
+def test_a_count_lost_once_is_resent_and_the_clause_judged(monkeypatch):
+    result = _can04(monkeypatch, _IgnoresCountsAfterCancel)
+    assert result.outcome is Outcome.PASS, result.detail
+    assert any("resends it once" in str(e.get("msg", "")) for e in result.exchange), result.exchange
+
+
+def test_a_count_never_answered_still_fails(monkeypatch):
+    result = _can04(monkeypatch, _NeverAnswersCountsAfterCancel)
+    assert result.outcome is Outcome.FAIL and "expected MISSION_REQUEST" in result.detail
