@@ -321,8 +321,11 @@ def replay(case: Case, *, capture: CaptureHook | None = None) -> Violation | Non
     signing, datagrams = _parse_steps(case)
     if signing and uri.kind != "builtin":
         raise UsageError(f"frames case: a signing vehicle exists only for builtin targets, not {case.target}")
+    profile = case.found_by.get("profile")   # the campaign's --profile: the same oracle GCS and stored form
+    if profile is not None and not isinstance(profile, str):
+        raise UsageError(f"found_by.profile: expected a profile name or file, got {profile!r:.40}")
     rig = Rig(uri, seed=case.seed, signing=signing, virtual=uri.in_process, capture=capture,
-              latency=case_latency(case.found_by))
+              latency=case_latency(case.found_by), profile=profile)
     try:
         violation = rig.start()
         if violation is not None:

@@ -68,6 +68,13 @@ DISCOVERY_WAIT = 5.0        # s for the first HEARTBEAT of a UDP target
 SETTLE_WAIT = 2.0           # s an in-process UDP vehicle gets to read a sent batch
 SEND_CHUNK = 32             # datagrams in flight at once over UDP (socket buffers are finite)
 PLAN_VARIANT = 7            # the known plan (conformance/harness/plans.py, variant 7)
+# A TCP target's bytes per second: a telemetry radio's 57600 baud. INAV's SITL reads its
+# TCP port into a 2048-byte ring that overwrites unread bytes when a burst outruns it
+# (drivers/serial_tcp.c:123-133; one frame is handled per 2 ms telemetry cycle): a 3200-byte
+# burst of 200 requests drew 72 answers. Bytes a target drops mid-stream join frames no
+# admission model predicts, so the fuzzer sends no faster than a flight controller on a
+# radio reads (480 minimal frames/s). A serial target is paced at its own baud rate.
+STREAM_FUZZ_RATE = 5760.0
 
 
 def campaign_key(seed: int, which: str = "target") -> bytes:
@@ -190,6 +197,7 @@ class Rig:
         self.vehicle: VehicleNode | None = None
         self.guard: GuardedNode | None = None
         self.counted: _Counted | None = None
+        self.stream: Any = None   # a TCP or serial target's link (reference_impl/net/stream_link.py)
         self.snapshot: Any = None
         self.plans = known_plans(uri.in_process)
         self.expected: tuple | None = None   # the mission as downloaded before the first batch
@@ -234,6 +242,9 @@ class Rig:
                     if peer is not None:
                         self.station.target_address = peer
                         self.gcs.endpoint.add_address(peer)
+                    self.stream = self.driver.stream_of(self.station)
+                    if self.stream is not None and self.stream.bytes_per_second is None:
+                        self.stream.bytes_per_second = STREAM_FUZZ_RATE
             except BaseException:
                 self.driver.close()
                 raise
@@ -320,6 +331,9 @@ class Rig:
             self.driver.run_until_quiet(timeout=0.0)
             return
         counted = self.counted
+        if counted is None and self.stream is not None:
+            self._flush_stream(self.stream)
+            return
         if counted is None:
             self.driver.run_until(_always, timeout=0.0)
             return
@@ -331,6 +345,23 @@ class Rig:
             want = base + i + len(chunk)
             self.driver.run_until(lambda: counted.received >= want or self._crash() is not None,
                                   timeout=SETTLE_WAIT)
+
+    def _flush_stream(self, link: Any) -> None:
+        """A stream link's queue is never overrun (it would drop whole frames, and the target
+        would read a stream the admission model did not): each datagram waits for room, and
+        the batch is on the wire before the oracle speaks. Every wait is bounded by the line
+        time of what is queued."""
+        pending, self.station.outbox = self.station.outbox, []
+        limit = link.max_queued // 2
+        rate = link.bytes_per_second or STREAM_FUZZ_RATE
+        for datagram in pending:
+            if not link.up:
+                break      # the target went away: check() reports it
+            self.driver.run_until(lambda: link.queued + len(datagram) <= limit or not link.up,
+                                  timeout=link.queued / rate + 1.0)
+            self.station.outbox.append(datagram)
+            self.driver.run_until(_always, timeout=0.0)
+        self.driver.run_until(lambda: link.queued == 0 or not link.up, timeout=link.queued / rate + 1.0)
 
     def crashed(self) -> Violation | None:
         return self._crash_violation()

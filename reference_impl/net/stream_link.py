@@ -95,6 +95,11 @@ class StreamLink:
             self.flush(now)
         return data
 
+    @property
+    def queued(self) -> int:
+        """Bytes waiting to be written (a writer that must not overrun the queue waits on it)."""
+        return len(self._out)
+
     def send(self, data: bytes, now: float) -> bool:
         """Queue one frame; False (dropped, counted) if the link is down or its queue full."""
         if self._fd is None:

@@ -161,6 +161,12 @@ def check_a_stray_item_continues_the_last_upload(without=()):
     assert summary(p.send(request_list(0))) == [(COUNT, 4, 0)]
     assert summary(p.send(waypoints(1)[0])) == [(ACK, R.INVALID_SEQUENCE, 0)]
     assert summary(p.send(request_list(0))) == [(COUNT, 4, 0)]
+    p = probe(without)                               # read in source (mavlink.c:1035-1036, 1121-1141):
+    assert summary(p.send(waypoints(1)[0])) == [(ACK, R.ACCEPTED, 0)]   # the counters start at 0: a plan
+    assert summary(p.send(count(2))) == [(REQ, 0, 0)]
+    assert summary(p.send(waypoints(2)[0])) == [(REQ, 1, 0)]
+    assert summary(p.send(clear_all(0))) == [(ACK, R.ACCEPTED, 0)]
+    assert summary(p.send(waypoints(2)[1])) == [(ACK, R.INVALID, 0)]   # number 2 of none stored: dropped
 
 
 def check_items_after_a_finished_upload_get_invalid_sequence(without=()):
