@@ -41,6 +41,8 @@ Fuzz a mission implementation and save what breaks it.
             truncation, bad magic, unknown ids, v1/v2 mixing, incompat flags, wrong-key and
             stale signatures, bytes between frames); the target must keep sending HEARTBEAT,
             still serve a normal download, and (in-process) neither raise nor change its plans.
+            Over tcp: the frames go at 5760 bytes/s (a 57600-baud radio: INAV's SITL loses
+            bytes of a faster burst), over serial: at the line's baud rate.
 
 In-process targets (builtin:, mutant:) run in virtual time: fast, and every case replays
 exactly. Each finding is shrunk and saved as FINDINGS/NAME.json (the case: seed and steps)

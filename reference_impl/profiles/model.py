@@ -76,9 +76,9 @@ class Profile:
     def int_messages_ignored(self) -> bool:
         """The vehicle drops MISSION_ITEM_INT / MISSION_REQUEST_INT unread (INAV 9.1): a GCS must
         use MISSION_ITEM / MISSION_REQUEST. The conformance tester falls back to them
-        (conformance/harness/float_forms.py) and the frame fuzzer's GCS downloads with them; the
-        protocol fuzzer's GCS, the knob matrix, the fault table and the round trips do not yet,
-        so they leave such a profile out."""
+        (conformance/harness/float_forms.py), the frame fuzzer's GCS downloads with them and the
+        protocol fuzzer's GCSs use them (fuzz/protocol/scope.py); the knob matrix, the fault
+        table and the round trips do not yet, so they leave such a profile out."""
         return bool({"MISSION_ITEM_INT", "MISSION_REQUEST_INT"} & self.config.ignored_messages)
 
     def setting(self, knob: str) -> KnobSetting | None:

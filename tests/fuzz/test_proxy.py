@@ -313,10 +313,16 @@ def test_udp_two_gcss_share_the_vehicle_each_through_its_own_port():
 
 # -- the command --------------------------------------------------------------------------
 
+def _sigint_as_by_default() -> None:
+    """A suite started as a background job passes SIGINT on ignored, and Python keeps an
+    ignored SIGINT: the proxy would never see the Ctrl-C this test sends."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _cli(*args: str) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "mavconform", *args], text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"}, preexec_fn=_sigint_as_by_default)
 
 
 def _port_of(line: str) -> int:
