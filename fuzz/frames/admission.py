@@ -7,7 +7,8 @@ MISSION_CLEAR_ALL *should* clear the plan, and a well-formed MISSION_REQUEST_LIS
 fuzz id *should* make the download of the oracle's GCS wait (DENIED). So a frame the target
 would accept is sent only if its message is INERT: it can neither change a stored plan nor
 open a transfer (HEARTBEAT, MISSION_ACK, item requests, items - a stray item or request in
-idle gets at most an error ACK - and vehicle-to-GCS telemetry). Any other accepted frame
+idle gets at most an error ACK - and vehicle-to-GCS telemetry; a profile whose uploads
+neither end nor apply whole takes items out of it: `inert_messages`). Any other accepted frame
 goes out with a checksum byte flipped (XOR 0xFF, at the same position every time, so
 replays are exact); the step records that it was.
 
@@ -100,10 +101,10 @@ TARGET_TABLE = _target_table()
 
 def inert_messages(behaviour: Any, ignored: frozenset[str] = frozenset()) -> frozenset[str]:
     """INERT for a vehicle of this profile. A stray item is inert where an upload ends (a
-    timer, a GCS's cancel) and is applied whole: INAV 9.1 has neither (VARIANTS I6, I7):
-    its upload counters outlive the upload, so after MISSION_COUNT 3 and three items a
-    stray MISSION_ITEM seq 3 is appended, and after any MISSION_COUNT an item 0 replaces
-    the plan (a 4-minute campaign against its SITL found "1 item instead of 3" so)."""
+    timer, a GCS's cancel) or is applied whole: INAV 9.1 has neither (VARIANTS I6; I11, I14
+    in docs/real-targets.md): its upload counters outlive the upload, so after MISSION_COUNT
+    3 and three items a stray MISSION_ITEM seq 3 is appended (seen on its SITL), and after
+    any MISSION_COUNT an item 0 replaces the plan."""
     returns_to_idle = behaviour.upload_timers and "MISSION_ACK" not in ignored
     if behaviour.atomic_upload or returns_to_idle:
         return INERT

@@ -1,7 +1,7 @@
 """What of the mission protocol a target's profile says it implements, and the fuzzer keeps to.
 
 A profile documents deviations that are not bugs to find again on every example: INAV 9.1
-(VARIANTS I2, I4, I5, I7) reads only MISSION_ITEM / MISSION_REQUEST, ignores mission_type
+(VARIANTS I2, I4, I5; I11 in docs/real-targets.md) reads only MISSION_ITEM / MISSION_REQUEST, ignores mission_type
 (a fence upload replaces the mission), answers MISSION_COUNT 0 with a request for item 0,
 drops a GCS's MISSION_ACK and MISSION_SET_CURRENT unread, and has no upload timers (an
 upload a GCS abandons stays open until the next MISSION_COUNT). Fuzzing those would only
@@ -31,7 +31,7 @@ class Scope:
     float_only: bool = False        # MISSION_ITEM_INT / MISSION_REQUEST_INT unread (I2)
     set_current: bool = True        # MISSION_SET_CURRENT read (I2: dropped unread)
     empty_upload: bool = True       # MISSION_COUNT 0 clears (I5: it opens an upload instead)
-    returns_to_idle: bool = True    # an abandoned upload ends by a timer or a GCS's cancel (I7)
+    returns_to_idle: bool = True    # an abandoned upload ends by a timer or a GCS's cancel (I11: neither)
     basis: str = "the spec"
 
     @classmethod
