@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
+.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -38,7 +38,10 @@ $(VENV)/.interop-installed: $(VENV)/.installed
 	$(BIN)/python -m pip install --quiet -e '.[interop]'
 	touch $@
 
-setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk wheel) on top of setup
+setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk wheel, yamspy) on top of setup
+
+run-msp-interop: $(VENV)/.interop-installed  ## the MSP codec against yamspy (tests/interop/test_yamspy_msp.py)
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests/interop/test_yamspy_msp.py
 
 run-mavsdk: $(VENV)/.interop-installed  ## the suite vs MAVSDK's MissionRawServer (tools/mavsdk_vehicle.py) with expectations/mavsdk.toml
 	$(BIN)/python -m pytest -q -p no:cacheprovider tests/interop/test_mavsdk_vehicle.py
