@@ -19,7 +19,7 @@ from pathlib import Path
 
 from mavconform.conformance.target_uri import FORMS, parse_target
 from mavconform.reference_impl.errors import UsageError
-from mavconform.vectors import deviations, messages, replay, store, verify
+from mavconform.vectors import deviations, messages, msp, replay, store, verify
 from mavconform.vectors.dialect_info import load_dialect
 
 from .options import time_scale
@@ -124,12 +124,15 @@ def run_verify(args: argparse.Namespace) -> int:
     for line in exchange_problems:
         print(f"FAIL {line}")
     exchange_seconds = time.perf_counter() - t1
+    msp_problems = [f"{vec['id']}: {why}" for vec in vset.msp if (why := msp.verify_ours(vec)) is not None]
+    for line in msp_problems:
+        print(f"FAIL {line}")
     disagree = len({m.vector for m in report.mismatches})
     print(f"ours: {report.checked} message vectors in {seconds:.3f} s: {report.checked - disagree} agree, "
           f"{len(sorted_.known)} known deviations, {len(sorted_.unexpected)} unexpected; "
           f"{len(vset.exchanges)} exchanges, {frames} frames in {exchange_seconds:.3f} s: "
-          f"{len(exchange_problems)} disagree")
-    return 1 if sorted_.unexpected or exchange_problems else 0
+          f"{len(exchange_problems)} disagree; {len(vset.msp)} MSP vectors: {len(msp_problems)} disagree")
+    return 1 if sorted_.unexpected or exchange_problems or msp_problems else 0
 
 
 def run_replay(args: argparse.Namespace) -> int:

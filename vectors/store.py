@@ -4,6 +4,7 @@ a regeneration gives the same bytes.
 Layout of a vectors directory (the package's own is the committed set):
     index.json                          what is here: format, dialect, test key, counts
     messages.jsonl                      one message vector per line (schema/message-vector.schema.json)
+    msp.jsonl                           one MSP frame vector per line (vectors/msp.py)
     exchanges/PROFILE/SCENARIO.json     an exchange transcript (schema/exchange.schema.json)
     exchanges/PROFILE/SCENARIO.mcap     the same frames as an MCAP capture (opens in Foxglove)
     exchanges/handover/SCENARIO.*       the handover exchanges (two GCSs), likewise
@@ -24,7 +25,7 @@ from typing import Any, Iterator
 
 from mavconform.reference_impl.errors import UsageError
 
-from . import exchanges, messages
+from . import exchanges, messages, msp
 from .dialect_info import DialectInfo
 from .schemas import MESSAGE_FORMAT, SCHEMAS
 
@@ -58,6 +59,10 @@ def generate(out: Path, dialect: DialectInfo, *, seed: int = messages.DEFAULT_SE
     with open(out / MESSAGES, "w", encoding="utf-8", newline="\n") as fh:
         for vec in vectors:
             fh.write(dumps(vec) + "\n")
+    msp_vectors = msp.generate()
+    with open(out / msp.FILE, "w", encoding="utf-8", newline="\n") as fh:
+        for vec in msp_vectors:
+            fh.write(dumps(vec) + "\n")
     t1 = time.perf_counter()
     done = []
     if dialect.is_ours:
@@ -79,7 +84,10 @@ def generate(out: Path, dialect: DialectInfo, *, seed: int = messages.DEFAULT_SE
     (out / SCHEMA_DIR).mkdir(exist_ok=True)
     for name, schema in SCHEMAS.items():
         _write_json(out / SCHEMA_DIR / name, schema)
-    _write_json(out / INDEX, _index(dialect, seed, vectors, done))
+    _write_json(out / INDEX, {**_index(dialect, seed, vectors, done), "msp": {
+        "file": msp.FILE, "vectors": len(msp_vectors),
+        "valid": sum(1 for v in msp_vectors if not v["expected_error"]),
+        "invalid": sum(1 for v in msp_vectors if v["expected_error"])}})
     return Generated(out, len(vectors), len(done), len(list(_data_files(out))),
                      time.perf_counter() - started, message_seconds, exchange_seconds)
 
@@ -138,7 +146,7 @@ def check(directory: Path, dialect: DialectInfo, *, seed: int = messages.DEFAULT
 
 def _data_files(directory: Path) -> Iterator[Path]:
     """The files generate() owns in `directory` (never the package's Python files)."""
-    for name in (INDEX, MESSAGES):
+    for name in (INDEX, MESSAGES, msp.FILE):
         if (directory / name).is_file():
             yield directory / name
     for pattern in (f"{SCHEMA_DIR}/*.json", f"{EXCHANGES}/*/*.json", f"{EXCHANGES}/*/*.mcap"):
@@ -153,6 +161,7 @@ class VectorSet:
     index: dict[str, Any]
     messages: list[dict[str, Any]]
     exchanges: dict[str, Path] = field(default_factory=dict)   # id "profile/scenario" -> transcript path
+    msp: list[dict[str, Any]] = field(default_factory=list)
 
 
 def load(directory: Path) -> VectorSet:
@@ -176,7 +185,23 @@ def load(directory: Path) -> VectorSet:
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
     found = {f"{p.parent.name}/{p.stem}": p for p in sorted(directory.glob(f"{EXCHANGES}/*/*.json"))}
-    return VectorSet(directory, index, vectors, found)
+    return VectorSet(directory, index, vectors, found, _read_msp(directory / msp.FILE))
+
+
+def _read_msp(path: Path) -> list[dict[str, Any]]:
+    """msp.jsonl, if there is one; a broken line is a UsageError naming it."""
+    if not path.is_file():
+        return []
+    out = []
+    for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        try:
+            vector = json.loads(line)
+        except json.JSONDecodeError as exc:
+            raise UsageError(f"{path}:{n}: not JSON ({exc.msg})") from None
+        if not isinstance(vector, dict) or not all(isinstance(vector.get(k), str) for k in ("id", "bytes", "payload")):
+            raise UsageError(f"{path}:{n}: expected an MSP vector object with an id, bytes and payload")
+        out.append(vector)
+    return out
 
 
 TRANSCRIPT_KEYS = {"events": list, "peers": dict, "link": dict, "seed": int, "id": str}

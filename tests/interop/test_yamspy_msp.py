@@ -64,3 +64,30 @@ def test_yamspy_reads_the_replies_we_write(code, payload, direction):
     assert got["packet_error"] == 0 and got["unsupported"] == 0
     assert got["code"] == code and got["message_length_expected"] == len(payload)
     assert bytes(got["message_buffer"]) == payload
+
+
+def _committed_msp_vectors():
+    from mavconform.vectors import store
+    return store.load(store.DATA_DIR).msp
+
+
+def test_yamspy_writes_our_v1_request_vectors_byte_for_byte():
+    requests = [v for v in _committed_msp_vectors() if v["expected_error"] is None and v["direction"] == "<"
+                and v["version"] == "v1"]
+    assert len(requests) == 7
+    for vec in requests:
+        board = _client()
+        board.send_RAW_msg(vec["command"], data=list(bytes.fromhex(vec["payload"])))
+        assert bytes(board.conn.written).hex() == vec["bytes"], vec["id"]
+
+
+def test_yamspy_reads_our_reply_vectors():
+    replies = [v for v in _committed_msp_vectors() if v["expected_error"] is None and v["direction"] == ">"
+               and v["version"] in ("v1", "v2")]
+    assert len(replies) >= 14
+    for vec in replies:
+        board = _client()
+        board.conn.to_read += bytes.fromhex(vec["bytes"])
+        got = board.receive_msg()
+        assert got["packet_error"] == 0 and got["code"] == vec["command"], vec["id"]
+        assert bytes(got["message_buffer"]).hex() == vec["payload"], vec["id"]
