@@ -29,13 +29,27 @@ def _pyproject() -> dict:
     return tomllib.loads((ROOT / "pyproject.toml").read_text())
 
 
-def test_every_package_in_the_tree_is_listed_under_the_namespace() -> None:
+def _data_folders() -> set[str]:
+    """The committed folders under the mapped trees that hold no Python: setuptools treats
+    each as a package, so each must be listed (else a "Package would be ignored" warning)."""
+    listed = subprocess.run(["git", "ls-files", "-z", *MAPPED], cwd=ROOT, capture_output=True, text=True)
+    if listed.returncode != 0:
+        pytest.skip("not a git checkout: the committed folders are unknown")
+    folders = set()
+    for name in filter(None, listed.stdout.split("\0")):
+        for parent in Path(name).parents:
+            if parent != Path(".") and not (ROOT / parent / "__init__.py").is_file():
+                folders.add("mavconform." + ".".join(parent.parts))
+    return folders
+
+
+def test_every_package_and_data_folder_in_the_tree_is_listed_under_the_namespace() -> None:
     tree = {"mavconform"} | {
         "mavconform." + ".".join(init.parent.relative_to(ROOT).parts)
         for top in MAPPED for init in (ROOT / top).rglob("__init__.py")}
     tree |= {".".join(init.parent.relative_to(ROOT).parts) for init in (ROOT / "mavconform").rglob("__init__.py")}
     setuptools = _pyproject()["tool"]["setuptools"]
-    assert set(setuptools["packages"]) == tree
+    assert set(setuptools["packages"]) == tree | _data_folders()
     assert setuptools["package-dir"] == {f"mavconform.{top}": top for top in MAPPED}
 
 
@@ -58,7 +72,28 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
                            capture_output=True, text=True, timeout=300)
     assert built.returncode == 0, built.stderr
     (path,) = out.glob("mavconform-*.whl")
+    BUILD_OUTPUT[path] = built.stdout + built.stderr
     return path
+
+
+BUILD_OUTPUT: dict[Path, str] = {}
+
+
+def test_the_wheel_builds_without_a_warning(wheel: Path) -> None:
+    """Issue 29: eight "Package would be ignored" warnings (440 lines) before a fresh clone's
+    first run; the data folders are now packages of their own with their files as package data."""
+    said = BUILD_OUTPUT[wheel]
+    assert "Warning" not in said and "would be ignored" not in said, said[:2000]
+
+
+def test_every_data_file_the_code_reads_is_in_the_wheel(wheel: Path) -> None:
+    listed = subprocess.run(["git", "ls-files", *MAPPED], cwd=ROOT, capture_output=True, text=True)
+    if listed.returncode != 0:
+        pytest.skip("not a git checkout")
+    data = {n for n in listed.stdout.split() if not n.endswith(".py") and Path(n).name != ".gitignore"}
+    with zipfile.ZipFile(wheel) as archive:
+        names = set(archive.namelist())
+    assert {f"mavconform/{n}" for n in data} - names == set()
 
 
 def test_the_wheel_holds_one_top_level_name(wheel: Path) -> None:

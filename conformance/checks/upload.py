@@ -39,10 +39,15 @@ def _reach(t: Tester, items: list[MissionItem], seq: int) -> None:
     """Start an upload and bring it to the vehicle's request for item `seq`: setup for a
     clause about what happens next, so a failure here leaves that clause undecided."""
     with beyond_the_clause(f"bringing an upload to its request for item {seq}"):
-        _start(t, items)
+        t.mark()
         for k in range(seq):
-            t.expect(request(k, mission_type=MT))
+            if k == 0:
+                procedures.send_count(t, len(items), MISSION, request(0, mission_type=MT))
+            else:
+                t.expect(request(k, mission_type=MT))
             _answer(t, items, k)
+        if seq == 0:
+            t.send(m.count_message(len(items), MISSION, t.target))
         t.expect(request(seq, mission_type=MT))
 
 
@@ -218,8 +223,8 @@ def gives_up_and_returns_to_idle(s: Session) -> None:
     # idle again: a fresh upload must start from item 0 and complete
     t = s.t
     items = plans.mission(2, variant=8)
-    _start(t, items)
-    t.expect(request(0, mission_type=MT))
+    t.mark()
+    procedures.send_count(t, len(items), MISSION, request(0, mission_type=MT))
     _answer(t, items, 0)
     with beyond_the_clause("finishing the new upload"):
         frame = _finish(t, items, first=1)

@@ -148,6 +148,21 @@ def await_plan_taken(t: Tester, accepted: Frame) -> None:
                f"{PLAN_TAKEN_WAIT * t.scale:g} s; going on")
 
 
+def send_count(t: Tester, count: int, mission_type: MissionType | int, answer: Match) -> Frame:
+    """MISSION_COUNT, and the vehicle's answer to it (`answer`). Unanswered within the spec's
+    timeout it is resent once, as a spec GCS does: INAV 9.1's SITL now and then leaves a
+    MISSION_COUNT that follows a quiet spell unanswered (seen in MIS.CAN.04 and MIS.UP.08;
+    150 COUNTs from pymavlink drew 150 answers), and a lost message is not what the clauses
+    that open an upload this way judge. A COUNT never answered still fails (`t.expect`)."""
+    t.send(m.count_message(count, mission_type, t.target))
+    first = t.poll_for(answer, t.timings.default_timeout)
+    if first is None:
+        t.note(f"no answer to MISSION_COUNT within {t.reply_timeout:g} s: the GCS resends it once")
+        t.send(m.count_message(count, mission_type, t.target))
+        first = t.expect(answer)
+    return first
+
+
 def open_download(t: Tester, mission_type: MissionType | int, *, resends: int = RETRIES) -> Frame | None:
     """MISSION_REQUEST_LIST (resent up to `resends` times); the MISSION_COUNT (`fresh_count`),
     or None."""

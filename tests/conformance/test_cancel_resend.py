@@ -1,7 +1,9 @@
-"""MIS.CAN.04 resends an unanswered MISSION_COUNT once, as a spec GCS does.
+"""MIS.CAN.04 and MIS.UP.08 resend an unanswered MISSION_COUNT once, as a spec GCS does.
 
-Seen on INAV 9.1 SITL over TCP: once in five runs, the new MISSION_COUNT after a cancelled
-upload drew no answer at all, and the clause failed on a lost message it does not judge.
+Seen on INAV 9.1 SITL over TCP: now and then the MISSION_COUNT that opens a new upload after
+a quiet spell drew no answer at all (CAN.04 in one run of five, UP.08 in one of four), and
+the clause failed on a lost message it does not judge (conformance/harness/procedures.py
+`send_count`).
 """
 
 from __future__ import annotations
@@ -64,3 +66,26 @@ def test_a_count_lost_once_is_resent_and_the_clause_judged(monkeypatch):
 def test_a_count_never_answered_still_fails(monkeypatch):
     result = _can04(monkeypatch, _NeverAnswersCountsAfterCancel)
     assert result.outcome is Outcome.FAIL and "expected MISSION_REQUEST" in result.detail
+
+
+class _IgnoresTheFirstCountOfTwo(MissionServer):
+    """Drops the first MISSION_COUNT of 2 items it gets (MIS.UP.08's fresh upload)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._dropped = False
+
+    def _on_count(self, msg, src, now):
+        if msg.count == 2 and not self._dropped:
+            self._dropped = True
+            return []
+        return super()._on_count(msg, src, now)
+
+
+def test_the_fresh_upload_after_a_given_up_one_resends_an_unanswered_count(monkeypatch):
+    """Seen on INAV 9.1 SITL in MIS.UP.08 (round 9): the same drop as MIS.CAN.04's."""
+    monkeypatch.setitem(MUTANTS, "test-only", Mutant("test-only", "", frozenset(), server_mutant(_IgnoresTheFirstCountOfTwo)))
+    with Session(parse_target("mutant:test-only"), virtual=True) as session:
+        result = run_clauses(session, [c for c in CLAUSES if c.id == "MIS.UP.08"]).results[0]
+    assert result.outcome is Outcome.PASS, result.detail
+    assert any("resends it once" in str(e.get("msg", "")) for e in result.exchange)
