@@ -40,15 +40,10 @@ def _reach(t: Tester, items: list[MissionItem], seq: int) -> None:
     clause about what happens next, so a failure here leaves that clause undecided."""
     with beyond_the_clause(f"bringing an upload to its request for item {seq}"):
         t.mark()
+        procedures.send_count(t, len(items), MISSION, request(0, mission_type=MT))
         for k in range(seq):
-            if k == 0:
-                procedures.send_count(t, len(items), MISSION, request(0, mission_type=MT))
-            else:
-                t.expect(request(k, mission_type=MT))
             _answer(t, items, k)
-        if seq == 0:
-            t.send(m.count_message(len(items), MISSION, t.target))
-        t.expect(request(seq, mission_type=MT))
+            t.expect(request(k + 1, mission_type=MT))
 
 
 def _serve(t: Tester, items: list[MissionItem], *, as_int: bool = True):
