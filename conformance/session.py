@@ -186,7 +186,7 @@ class Session:
         """Does the target's profile (its builtin vehicle's, or --profile's) say it ignores
         the _INT mission messages (INAV 9.1)?"""
         if self.vehicle is not None:
-            return bool({"MISSION_ITEM_INT", "MISSION_REQUEST_INT"} & self.vehicle.config.ignored_messages)
+            return self.vehicle.config.int_forms_ignored
         if self.uri.profile is None:
             return False
         from mavconform.reference_impl.profiles import load_profile

@@ -110,6 +110,18 @@ class VehicleConfig:
         if len({p.name for p in self.params}) != len(self.params):
             raise ValueError("params: a parameter is listed twice")
 
+    @property
+    def int_forms_ignored(self) -> bool:
+        """MISSION_ITEM_INT / MISSION_REQUEST_INT are dropped unread (INAV 9.1): a GCS must use
+        MISSION_ITEM / MISSION_REQUEST."""
+        return bool({"MISSION_ITEM_INT", "MISSION_REQUEST_INT"} & self.ignored_messages)
+
+    @property
+    def abandoned_upload_ends(self) -> bool:
+        """An upload a GCS abandons is ended, by the vehicle's timer or by the GCS's cancel.
+        INAV 9.1 has neither (no upload timers, MISSION_ACK unread): it stays open."""
+        return self.behaviour.upload_timers and "MISSION_ACK" not in self.ignored_messages
+
 
 class VehicleNode:
     """Reference vehicle as a sans-IO datagram node."""

@@ -56,13 +56,9 @@ def generate(out: Path, dialect: DialectInfo, *, seed: int = messages.DEFAULT_SE
         old.unlink()
     vectors = messages.generate(dialect, seed)
     message_seconds = time.perf_counter() - started
-    with open(out / MESSAGES, "w", encoding="utf-8", newline="\n") as fh:
-        for vec in vectors:
-            fh.write(dumps(vec) + "\n")
+    _write_lines(out / MESSAGES, vectors)
     msp_vectors = msp.generate()
-    with open(out / msp.FILE, "w", encoding="utf-8", newline="\n") as fh:
-        for vec in msp_vectors:
-            fh.write(dumps(vec) + "\n")
+    _write_lines(out / msp.FILE, msp_vectors)
     t1 = time.perf_counter()
     done = []
     if dialect.is_ours:
@@ -169,8 +165,17 @@ def load(directory: Path) -> VectorSet:
     index = _read_json(directory / INDEX)
     if index.get("format") != MESSAGE_FORMAT:
         raise UsageError(f"{directory / INDEX}: not a {MESSAGE_FORMAT} index (format {index.get('format')!r})")
-    vectors = []
-    path = directory / MESSAGES
+    vectors = _read_lines(directory / MESSAGES, ("id", "hex"), "a vector object with an id and hex")
+    found = {f"{p.parent.name}/{p.stem}": p for p in sorted(directory.glob(f"{EXCHANGES}/*/*.json"))}
+    msp_path = directory / msp.FILE   # a directory made before MSP, or for a user's dialect, has none
+    msp_vectors = (_read_lines(msp_path, ("id", "bytes", "payload"), "an MSP vector object with an id, bytes "
+                               "and payload") if msp_path.is_file() else [])
+    return VectorSet(directory, index, vectors, found, msp_vectors)
+
+
+def _read_lines(path: Path, keys: tuple[str, ...], what: str) -> list[dict[str, Any]]:
+    """A JSON-lines file of objects with string `keys`; a broken line is a UsageError naming it."""
+    out = []
     try:
         with open(path, encoding="utf-8") as fh:
             for n, line in enumerate(fh, 1):
@@ -178,29 +183,11 @@ def load(directory: Path) -> VectorSet:
                     vector = json.loads(line)
                 except json.JSONDecodeError as exc:
                     raise UsageError(f"{path}:{n}: not JSON ({exc.msg})") from None
-                if not isinstance(vector, dict) or not isinstance(vector.get("id"), str) \
-                        or not isinstance(vector.get("hex"), str):
-                    raise UsageError(f"{path}:{n}: expected a vector object with an id and hex")
-                vectors.append(vector)
+                if not isinstance(vector, dict) or not all(isinstance(vector.get(k), str) for k in keys):
+                    raise UsageError(f"{path}:{n}: expected {what}")
+                out.append(vector)
     except OSError as exc:
         raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
-    found = {f"{p.parent.name}/{p.stem}": p for p in sorted(directory.glob(f"{EXCHANGES}/*/*.json"))}
-    return VectorSet(directory, index, vectors, found, _read_msp(directory / msp.FILE))
-
-
-def _read_msp(path: Path) -> list[dict[str, Any]]:
-    """msp.jsonl, if there is one; a broken line is a UsageError naming it."""
-    if not path.is_file():
-        return []
-    out = []
-    for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
-        try:
-            vector = json.loads(line)
-        except json.JSONDecodeError as exc:
-            raise UsageError(f"{path}:{n}: not JSON ({exc.msg})") from None
-        if not isinstance(vector, dict) or not all(isinstance(vector.get(k), str) for k in ("id", "bytes", "payload")):
-            raise UsageError(f"{path}:{n}: expected an MSP vector object with an id, bytes and payload")
-        out.append(vector)
     return out
 
 
@@ -239,6 +226,12 @@ def _read_json(path: Path) -> dict[str, Any]:
 def dumps(obj: Any) -> str:
     """Canonical one-line JSON."""
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
+
+
+def _write_lines(path: Path, vectors: list[dict[str, Any]]) -> None:
+    with open(path, "w", encoding="utf-8", newline="\n") as fh:
+        for vec in vectors:
+            fh.write(dumps(vec) + "\n")
 
 
 def _write_json(path: Path, obj: Any) -> None:

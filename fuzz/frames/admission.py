@@ -99,14 +99,13 @@ def _target_table() -> MessageTable:
 TARGET_TABLE = _target_table()
 
 
-def inert_messages(behaviour: Any, ignored: frozenset[str] = frozenset()) -> frozenset[str]:
+def inert_messages(config: Any) -> frozenset[str]:
     """INERT for a vehicle of this profile. A stray item is inert where an upload ends (a
     timer, a GCS's cancel) or is applied whole: INAV 9.1 has neither (VARIANTS I6; I11, I14
     in docs/real-targets.md): its upload counters outlive the upload, so after MISSION_COUNT
     3 and three items a stray MISSION_ITEM seq 3 is appended (seen on its SITL), and after
     any MISSION_COUNT an item 0 replaces the plan."""
-    returns_to_idle = behaviour.upload_timers and "MISSION_ACK" not in ignored
-    if behaviour.atomic_upload or returns_to_idle:
+    if config.behaviour.atomic_upload or config.abandoned_upload_ends:
         return INERT
     return INERT - {"MISSION_ITEM", "MISSION_ITEM_INT"}
 

@@ -89,12 +89,12 @@ def known_plans(in_process: bool) -> dict[MissionType, list]:
     return {t: plans.plan(t, variant=PLAN_VARIANT) for t in types}
 
 
-def _float_only(uri: TargetUri, profile: str | None) -> bool:
-    """Does the target (its builtin profile, or --profile's) ignore the _INT mission messages
-    (INAV 9.1)? Then the oracle GCS reads plans with MISSION_REQUEST."""
+def _float_only(profile: str | None) -> bool:
+    """Does --profile say the external target ignores the _INT mission messages (INAV 9.1)?
+    Then the oracle GCS reads plans with MISSION_REQUEST (an in-process vehicle's own config
+    says so for it)."""
     from mavconform.reference_impl.profiles import load_profile
-    name = uri.name if uri.kind == "builtin" and uri.name != "spec" else None if uri.in_process else profile
-    return name is not None and load_profile(name).int_messages_ignored
+    return profile is not None and load_profile(profile).int_messages_ignored
 
 
 class _Station:
@@ -206,7 +206,7 @@ class Rig:
         self.datagrams_sent = 0
         gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],
                                signing=SigningKey(self.key) if self.key else None,
-                               download_int=not _float_only(uri, profile))
+                               download_int=uri.in_process or not _float_only(profile))
         wall = self.clock.wall
         if uri.in_process:
             keyed = {"signing": SigningKey(self.key), "require_signature": True} if self.key else {}
@@ -216,7 +216,8 @@ class Rig:
             self.counted = _Counted(self.guard)
             gcs_config = GcsConfig(system=ORACLE_ID[0], component=ORACLE_ID[1],
                                    target=(self.vehicle.config.system, self.vehicle.config.component),
-                                   signing=gcs_config.signing, download_int=gcs_config.download_int)
+                                   signing=gcs_config.signing,
+                                   download_int=not self.vehicle.config.int_forms_ignored)
         self.gcs = GcsNode(gcs_config, wall_clock=wall)
         if virtual:
             self.driver: Any = SimNetwork(seed, self.clock)
@@ -272,12 +273,12 @@ class Rig:
         inert = INERT
         if self.vehicle is not None:
             self.form = form_of_behaviour(self.vehicle.config.behaviour, str(self.uri))
-            inert = inert_messages(self.vehicle.config.behaviour, self.vehicle.config.ignored_messages)
+            inert = inert_messages(self.vehicle.config)
         elif self.profile is not None:
             from mavconform.reference_impl.profiles import load_profile
             profile = load_profile(self.profile)
             self.form = form_of_behaviour(profile.behaviour, f"profile {self.profile} (--profile)")
-            inert = inert_messages(profile.behaviour, profile.config.ignored_messages)
+            inert = inert_messages(profile.config)
         else:
             heartbeat = self.gcs.target_heartbeat
             self.form = form_for_target(getattr(heartbeat, "autopilot", None), getattr(heartbeat, "type", None))

@@ -35,14 +35,15 @@ class Scope:
     basis: str = "the spec"
 
     @classmethod
-    def of(cls, behaviour: Any, ignored: frozenset[str], basis: str) -> Scope:
-        """The scope a profile's knobs (its behaviour and the messages it never reads) imply."""
+    def of(cls, config: Any, basis: str) -> Scope:
+        """The scope a vehicle's profile (its VehicleConfig: knobs and unread messages) implies."""
+        behaviour = config.behaviour
         types = frozenset({MISSION}) if behaviour.mission_type_ignored else cls().plan_types
         return cls(plan_types=types,
-                   float_only=bool({"MISSION_ITEM_INT", "MISSION_REQUEST_INT"} & ignored),
-                   set_current="MISSION_SET_CURRENT" not in ignored,
+                   float_only=config.int_forms_ignored,
+                   set_current="MISSION_SET_CURRENT" not in config.ignored_messages,
                    empty_upload=not behaviour.count0_opens_upload,
-                   returns_to_idle=behaviour.upload_timers and "MISSION_ACK" not in ignored,
+                   returns_to_idle=config.abandoned_upload_ends,
                    basis=basis)
 
     @property

@@ -75,19 +75,18 @@ class Profile:
     scope: Scope = Scope()            # the part of the protocol it has (fuzz.protocol.scope)
 
 
-def rules_of(behaviour: Any, basis: str, ignored: frozenset[str] = frozenset()) -> Profile:
-    """The oracle rules a vehicle behaviour (a profile's knobs) and the messages it never
-    reads imply."""
+def rules_of(config: Any, basis: str) -> Profile:
+    """The oracle rules a vehicle's profile (its VehicleConfig: knobs and unread messages) implies."""
+    behaviour = config.behaviour
     return Profile(atomic=behaviour.atomic_upload, timings=behaviour.timings,
                    retry_cap=behaviour.retry_cap, form=form_of_behaviour(behaviour, basis), basis=basis,
-                   scope=Scope.of(behaviour, ignored, basis))
+                   scope=Scope.of(config, basis))
 
 
 def profile_from(name_or_file: str, basis: str) -> Profile:
     """The oracle rules of a vehicle profile (builtin name or TOML file)."""
     from mavconform.reference_impl.profiles import load_profile
-    profile = load_profile(name_or_file)
-    return rules_of(profile.behaviour, basis, profile.config.ignored_messages)
+    return rules_of(load_profile(name_or_file).config, basis)
 
 
 def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | None = None,
@@ -98,7 +97,7 @@ def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | No
     if uri.kind == "mutant":
         return Profile()
     if vehicle is not None:
-        return rules_of(vehicle.server.behaviour, f"the {uri} profile", vehicle.config.ignored_messages)
+        return rules_of(vehicle.config, f"the {uri} profile")
     if chosen is not None:
         return profile_from(chosen, f"profile {chosen} (--profile)")
     name = profile_for_target(autopilot, mav_type)

@@ -79,7 +79,7 @@ class Profile:
         (conformance/harness/float_forms.py), the frame fuzzer's GCS downloads with them and the
         protocol fuzzer's GCSs use them (fuzz/protocol/scope.py); the knob matrix, the fault
         table and the round trips do not yet, so they leave such a profile out."""
-        return bool({"MISSION_ITEM_INT", "MISSION_REQUEST_INT"} & self.config.ignored_messages)
+        return self.config.int_forms_ignored
 
     def setting(self, knob: str) -> KnobSetting | None:
         return next((s for s in self.settings if s.knob == knob), None)

@@ -43,11 +43,11 @@ class _NeverAnswersCountsAfterCancel(_IgnoresCountsAfterCancel):
     ignored = 1000
 
 
-def _can04(monkeypatch, server_cls: type[MissionServer]):
+def _judge(monkeypatch, server_cls: type[MissionServer], clause_id: str = "MIS.CAN.04"):
+    """One clause against a vehicle whose mission server is `server_cls`."""
     monkeypatch.setitem(MUTANTS, "test-only", Mutant("test-only", "", frozenset(), server_mutant(server_cls)))
-    clause = [c for c in CLAUSES if c.id == "MIS.CAN.04"]
     with Session(parse_target("mutant:test-only"), virtual=True) as session:
-        return run_clauses(session, clause).results[0]
+        return run_clauses(session, [c for c in CLAUSES if c.id == clause_id]).results[0]
 
 
 def test_a_count_answered_at_once_is_not_resent():
@@ -58,13 +58,13 @@ def test_a_count_answered_at_once_is_not_resent():
 
 
 def test_a_count_lost_once_is_resent_and_the_clause_judged(monkeypatch):
-    result = _can04(monkeypatch, _IgnoresCountsAfterCancel)
+    result = _judge(monkeypatch, _IgnoresCountsAfterCancel)
     assert result.outcome is Outcome.PASS, result.detail
     assert any("resends it once" in str(e.get("msg", "")) for e in result.exchange), result.exchange
 
 
 def test_a_count_never_answered_still_fails(monkeypatch):
-    result = _can04(monkeypatch, _NeverAnswersCountsAfterCancel)
+    result = _judge(monkeypatch, _NeverAnswersCountsAfterCancel)
     assert result.outcome is Outcome.FAIL and "expected MISSION_REQUEST" in result.detail
 
 
@@ -84,8 +84,6 @@ class _IgnoresTheFirstCountOfTwo(MissionServer):
 
 def test_the_fresh_upload_after_a_given_up_one_resends_an_unanswered_count(monkeypatch):
     """Seen on INAV 9.1 SITL in MIS.UP.08 (round 9): the same drop as MIS.CAN.04's."""
-    monkeypatch.setitem(MUTANTS, "test-only", Mutant("test-only", "", frozenset(), server_mutant(_IgnoresTheFirstCountOfTwo)))
-    with Session(parse_target("mutant:test-only"), virtual=True) as session:
-        result = run_clauses(session, [c for c in CLAUSES if c.id == "MIS.UP.08"]).results[0]
+    result = _judge(monkeypatch, _IgnoresTheFirstCountOfTwo, "MIS.UP.08")
     assert result.outcome is Outcome.PASS, result.detail
     assert any("resends it once" in str(e.get("msg", "")) for e in result.exchange)

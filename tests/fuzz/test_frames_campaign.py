@@ -25,6 +25,12 @@ def test_a_bounded_campaign_passes_on_the_spec_vehicle() -> None:
     assert campaign.neutralised > 0     # the admission rule was exercised
 
 
+def test_a_bounded_campaign_passes_on_builtin_inav() -> None:
+    """INAV reads only the float forms: the oracle's downloads use them (from the vehicle's
+    own config), and an intact stray item, which INAV may append, is never sent."""
+    assert FrameCampaign("builtin:inav", seed=11, max_examples=12).run() == []
+
+
 def test_the_planted_decoder_bug_is_found_shrunk_saved_and_replayed(tmp_path) -> None:
     assert MUTANTS["raises-on-truncated-frame"].breaks == frozenset({"MIS.FRM.05"})   # the one clause that sends a truncated frame
     (case,) = search(PLANTED, seed=3, max_examples=30)

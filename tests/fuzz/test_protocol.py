@@ -178,12 +178,16 @@ def test_a_vehicle_that_raises_is_a_crash_finding(monkeypatch):
     assert v is not None and v.invariant == "target-crash" and "ZeroDivisionError: planted" in v.detail
 
 
+# A GCS that sends a MISSION_COUNT and then never answers (the mute one)
+ABANDONED_UPLOAD = ({"op": "stray", "during": None, "after": 0.0, "messages": [
+    {"msg": "MISSION_COUNT", "fields": {"count": 2, "mission_type": 0, "opaque_id": 0},
+     "to": "target", "from": "mute"}]},)
+
+
 def test_a_vehicle_that_never_gives_up_is_not_idle():
     """A GCS that sends a MISSION_COUNT and then never answers: the spec vehicle gives up
     after its retries; `mutant:never-gives-up` requests forever."""
-    steps = ({"op": "stray", "during": None, "after": 0.0, "messages": [
-        {"msg": "MISSION_COUNT", "fields": {"count": 2, "mission_type": 0, "opaque_id": 0},
-         "to": "target", "from": "mute"}]},)
+    steps = ABANDONED_UPLOAD
     assert replay(Case("protocol", "builtin:spec", 0, steps)) is None
     v = replay(Case("protocol", "mutant:never-gives-up", 0, steps))
     assert v is not None and v.invariant == "idle" and "RECEIVING" in v.detail

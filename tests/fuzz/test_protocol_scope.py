@@ -16,7 +16,7 @@ from mavconform.fuzz.protocol.scope import Scope
 from mavconform.fuzz.protocol.world import profile_from
 from mavconform.reference_impl.mission.store import MissionStore
 
-from .test_protocol import WAYPOINT, upload
+from .test_protocol import ABANDONED_UPLOAD, WAYPOINT, upload
 
 
 @pytest.fixture(scope="module")
@@ -61,9 +61,7 @@ def test_a_campaign_against_builtin_inav_finds_nothing_it_documents():
 def test_an_upload_inav_is_left_with_is_not_an_idle_finding_but_is_on_the_spec_vehicle():
     """A GCS that sends MISSION_COUNT and falls silent: INAV has no upload timer and keeps
     the upload open (documented); a vehicle of the spec profile must give up."""
-    steps = ({"op": "stray", "during": None, "after": 0.0, "messages": [
-        {"msg": "MISSION_COUNT", "fields": {"count": 2, "mission_type": 0, "opaque_id": 0},
-         "to": "target", "from": "mute"}]},)
+    steps = ABANDONED_UPLOAD
     assert replay(Case("protocol", "builtin:inav", 0, steps)) is None
     v = replay(Case("protocol", "mutant:never-gives-up", 0, steps))
     assert v is not None and v.invariant == "idle" and "RECEIVING" in v.detail
