@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
+.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-msp run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -39,6 +39,9 @@ $(VENV)/.interop-installed: $(VENV)/.installed
 	touch $@
 
 setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk wheel, yamspy) on top of setup
+
+run-msp: setup       ## the MSP clauses vs builtin:msp (INAV's waypoint store) over TCP loopback -> reports/msp/
+	$(BIN)/mavconform run --target builtin:msp --report-dir reports/msp -q
 
 run-msp-interop: $(VENV)/.interop-installed  ## the MSP codec against yamspy (tests/interop/test_yamspy_msp.py)
 	$(BIN)/python -m pytest -q -p no:cacheprovider tests/interop/test_yamspy_msp.py

@@ -331,10 +331,12 @@ CLAUSES: tuple[Clause, ...] = (
 
 # The GCS's side (MIS.G.*, role gcs): judged by `mavconform run --role gcs`, apart from these.
 from .gcs.clauses import GCS_CLAUSES  # noqa: E402
+# An MSP flight controller's waypoint store (MSP.*, role msp): `mavconform run --target builtin:msp|msp:...`.
+from .msp.clauses import MSP_CLAUSES  # noqa: E402
 
-BY_ID: dict[str, Clause] = {c.id: c for c in CLAUSES + GCS_CLAUSES}
-assert len(BY_ID) == len(CLAUSES) + len(GCS_CLAUSES), "duplicate clause id"
-BY_ROLE: dict[Role, tuple[Clause, ...]] = {V: CLAUSES, Role.GCS: GCS_CLAUSES}
+BY_ID: dict[str, Clause] = {c.id: c for c in CLAUSES + GCS_CLAUSES + MSP_CLAUSES}
+assert len(BY_ID) == len(CLAUSES) + len(GCS_CLAUSES) + len(MSP_CLAUSES), "duplicate clause id"
+BY_ROLE: dict[Role, tuple[Clause, ...]] = {V: CLAUSES, Role.GCS: GCS_CLAUSES, Role.MSP: MSP_CLAUSES}
 
 
 def select(globs: str | None = None, levels: str | None = None, role: Role = V) -> list[Clause]:

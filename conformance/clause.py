@@ -14,8 +14,9 @@ SEED_000 = "seeds/000_e382b17b02933558.txt"   # the Mission Protocol text (secon
 SEED_001 = "seeds/001_8a174eac43c4bfd2.txt"   # MAVLink framing, routing and signing
 UPSTREAM = "mavlink-upstream/common.xml"       # upstream message definitions
 
-# HO: handover (operator control); MIS.G.*: the GCS's side of the Mission Protocol
-_ID = re.compile(r"(MIS|HO)(\.G)?\.[A-Z]{2,4}\.\d{2}")
+# HO: handover (operator control); MIS.G.*: the GCS's side of the Mission Protocol; MSP.*:
+# an MSP flight controller's waypoint store (seed 004, INAV)
+_ID = re.compile(r"(MIS|HO)(\.G)?\.[A-Z]{2,4}\.\d{2}|MSP\.[A-Z]{2,4}\.\d{2}")
 
 
 class Level(str, Enum):
@@ -30,11 +31,12 @@ class Level(str, Enum):
 class Role(str, Enum):
     VEHICLE = "vehicle"
     GCS = "gcs"
+    MSP = "msp"          # an MSP flight controller (conformance/msp)
 
 
 @dataclass(frozen=True)
 class Clause:
-    id: str            # stable: MIS|HO[.G].<group>.<nn>; never renumbered, retired ids are not reused
+    id: str            # stable: MIS|HO[.G].<group>.<nn> or MSP.<group>.<nn>; never renumbered, retired ids are not reused
     level: Level
     role: Role
     title: str         # one line in our words

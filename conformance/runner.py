@@ -225,14 +225,7 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
         guard.hold()   # from here on a signal waits for the restore and the reports
     how = guard.first if guard is not None else None
     if interrupted:
-        by = f" ({how})" if how else ""
-        done = {r.clause_id for r in results}
-        for clause in clauses:
-            if clause.id in done:
-                continue
-            record(clause, ClauseResult(clause.id, Outcome.SKIPPED,
-                                        f"interrupted{by} while it ran: not decided" if clause.id == phase
-                                        else f"not run: the run was interrupted{by} during {phase}"))
+        skip_undecided(clauses, results, phase, how, record)
         if identity is not None:
             _after_interrupt(session)
     if not restore:
@@ -254,6 +247,18 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
                       interrupted_by=how if interrupted else None,
                       receive_queue=session.receive_facts(), flights=list(session.flights),
                       link=session.link_facts, link_events=session.link_events())
+
+
+def skip_undecided(clauses: list[Clause], results: list[ClauseResult], phase: str, how: str | None,
+                   record: Callable[[Clause, ClauseResult], None]) -> None:
+    """After an interrupt: every clause not decided is `skipped`, saying where the run stopped."""
+    by = f" ({how})" if how else ""
+    done = {r.clause_id for r in results}
+    for clause in clauses:
+        if clause.id not in done:
+            record(clause, ClauseResult(clause.id, Outcome.SKIPPED,
+                                        f"interrupted{by} while it ran: not decided" if clause.id == phase
+                                        else f"not run: the run was interrupted{by} during {phase}"))
 
 
 def interrupted_before_start(clauses: Iterable[Clause], how: str | None,

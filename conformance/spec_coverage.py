@@ -32,7 +32,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from .catalogue import BY_ID, CLAUSES, GCS_CLAUSES
+from .catalogue import BY_ID, CLAUSES, GCS_CLAUSES, MSP_CLAUSES
 from .clause import SEED_000, Clause, Role
 
 PART_HEADING = "Mission Protocol"
@@ -241,7 +241,7 @@ QUOTED_NOT_CHECKED: dict[tuple[str, str], str] = {
                               "given up early",
 }
 
-ALL_CLAUSES: tuple[Clause, ...] = CLAUSES + GCS_CLAUSES
+ALL_CLAUSES: tuple[Clause, ...] = CLAUSES + GCS_CLAUSES + MSP_CLAUSES
 
 
 def _normal(text: str) -> str:
@@ -357,7 +357,8 @@ def render_markdown() -> str:
         f"## Clauses from other sources ({len(others)})",
         "",
         "Where seed 000 is silent: framing and routing from seed 001, message definitions from the "
-        "upstream XML.",
+        "upstream XML; an MSP flight controller's waypoint store (MSP.*) from seed 004 and INAV 9.1's "
+        "docs and source (`inav-9.1/...`).",
         "",
         "| clause | role | level | source | title |",
         "|---|---|---|---|---|",

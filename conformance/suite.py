@@ -110,16 +110,18 @@ def guarded_run(options: document.RunOptions, expected: expectations.Expectation
                 baseline: dict[str, str] | None, report_dir: Path | None,
                 clauses: Callable[[InterruptGuard, CaptureHook | None, OnResult | None], RunOutcome], *,
                 on_result: OnResult | None, stop_signals: tuple[int, ...], capture: bool,
+                frames: Callable[..., list[dict[str, Any]]] | None = None,
                 ) -> tuple[dict[str, Any], RunOutcome]:
     """What every run does around its clauses, whichever side it tests: under an
     `InterruptGuard`, with the MCAP capture (if `capture` and a report folder), each result
     judged against the expectations as it comes; then the run judged, its document built and
     its reports written, and a signal that came meanwhile noted in `late_signal`.
-    `clauses(guard, capture_hook, on_result)` runs them."""
+    `clauses(guard, capture_hook, on_result)` runs them; `frames`: how the capture reads
+    another protocol's bytes (MSP), MAVLink's if None."""
     started = dt.datetime.now(dt.timezone.utc)
     on_result = _judged_live(on_result, expected)
     with InterruptGuard(stop_signals) as guard:
-        mcap = McapCapture(report_dir / CAPTURE_NAME) if capture and report_dir is not None else None
+        mcap = McapCapture(report_dir / CAPTURE_NAME, frames=frames) if capture and report_dir is not None else None
         try:
             run = clauses(guard, guard.atomic(mcap) if mcap is not None else None, on_result)
         finally:

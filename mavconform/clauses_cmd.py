@@ -2,9 +2,11 @@
 
 Each line: id, level, role, title, and where the requirement comes from. Filter with
 --clauses (comma-separated globs) and --level. --role gcs lists the GCS side (MIS.G.*,
-`mavconform run --role gcs`) instead of the vehicle's. --mutants lists the negative controls:
-reference vehicles with one behaviour broken, usable as targets (`mutant:NAME`), or with
---role gcs reference GCSs with one (`gcs-mutant:NAME`).
+`mavconform run --role gcs`) instead of the vehicle's; --role msp an MSP flight controller's
+waypoint store (MSP.*, `mavconform run --target builtin:msp|msp:...`). --mutants lists the
+negative controls: reference vehicles with one behaviour broken, usable as targets
+(`mutant:NAME`), or with --role gcs reference GCSs with one (`gcs-mutant:NAME`), with --role
+msp MSP flight controllers with one (`msp-mutant:NAME`).
 --coverage prints the spec-coverage map instead (docs/spec-coverage.md): every requirement
 sentence of seed 000 and the clauses that check it, or why none does.
 """
@@ -26,8 +28,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--clauses", metavar="GLOB", help="comma-separated id globs, e.g. 'MIS.UP.*'")
     p.add_argument("--level", metavar="LEVELS", help="only these levels, e.g. MUST or SHOULD,MAY")
-    p.add_argument("--role", choices=("vehicle", "gcs"), default="vehicle",
-                   help="which side's clauses: vehicle (default) or gcs (MIS.G.*)")
+    p.add_argument("--role", choices=("vehicle", "gcs", "msp"), default="vehicle",
+                   help="which side's clauses: vehicle (default), gcs (MIS.G.*) or msp (MSP.*: an MSP "
+                        "flight controller)")
     p.add_argument("--requirement", action="store_true", help="print each requirement sentence too")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--mutants", action="store_true", help="list the mutant vehicles instead")
@@ -64,8 +67,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--output: only with --coverage")
     role = Role(args.role)
     chosen = catalogue.select(args.clauses, args.level, role=role)
-    if args.mutants and role is Role.GCS:
-        return _gcs_mutants(args, {c.id for c in chosen})
+    if args.mutants and role is not Role.VEHICLE:
+        return _other_mutants(args, role, {c.id for c in chosen})
     if args.mutants:
         from mavconform.conformance.mutants import MUTANTS
         wanted = {c.id for c in chosen}
@@ -92,13 +95,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _gcs_mutants(args: argparse.Namespace, wanted: set[str]) -> int:
-    from mavconform.conformance.gcs.mutants import GCS_MUTANTS
-    rows = [mu for mu in GCS_MUTANTS.values() if mu.breaks & wanted]
+def _other_mutants(args: argparse.Namespace, role: Role, wanted: set[str]) -> int:
+    if role is Role.GCS:
+        from mavconform.conformance.gcs.mutants import GCS_MUTANTS as mutants
+        prefix = "gcs-mutant:"
+    else:
+        from mavconform.conformance.msp.mutants import MSP_MUTANTS as mutants
+        prefix = "msp-mutant:"
+    rows = [mu for mu in mutants.values() if mu.breaks & wanted]
     if args.json:
         print(json.dumps([{"name": mu.name, "description": mu.description,
                            "breaks": sorted(mu.breaks)} for mu in rows], indent=2))
         return 0
     for mu in rows:
-        print(f"gcs-mutant:{mu.name:<24} {mu.description}\n{'':<36} breaks {', '.join(sorted(mu.breaks))}")
+        print(f"{prefix}{mu.name:<24} {mu.description}\n{'':<36} breaks {', '.join(sorted(mu.breaks))}")
     return 0

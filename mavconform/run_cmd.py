@@ -18,6 +18,13 @@ there too). The command exits 0 when the GCS reported success; it is killed afte
 --gcs-timeout seconds. docs/gcs-conformance.md gives the job format and the adapters shipped
 for the reference GCS, MAVSDK and MAVProxy (tools/gcs_adapters/).
 
+An MSP flight controller (the MSP.* clauses: its waypoint store, seed 004 and INAV 9.1) is
+judged when --target names one: builtin:msp (our model of INAV's, over TCP loopback),
+msp-mutant:NAME, msp:tcp:HOST:PORT (INAV's SITL serves MSP on 5760 and 5761),
+msp:serial:DEVICE[:BAUD] (115200 by default); docs/msp.md. The run reads the flight
+controller's mission first and writes it back after; MSP.WP.09 saves to its non-volatile
+storage and saves back what was there. Run it on a disarmed flight controller on the bench.
+
 Exit codes: 0 every clause passed or is a known deviation (SHOULD failures count only with
 --strict); 1 a clause failed unexpectedly, could not be decided, or the target did not
 answer (with --baseline: only a clause that passed in the baseline and does not now);
@@ -43,6 +50,10 @@ from mavconform.conformance import document, suite
 from mavconform.conformance.clause import Clause
 from mavconform.conformance.outcome import ClauseResult, Outcome
 from mavconform.conformance.gcs import suite as gcs_suite
+from mavconform.conformance.msp import suite as msp_suite
+from mavconform.conformance.msp import target as msp_target
+from mavconform.conformance.msp.target import FORMS as MSP_FORMS
+from mavconform.conformance.msp.target import is_msp_target
 from mavconform.conformance.target_uri import FORMS
 from mavconform.reference_impl.errors import UsageError
 
@@ -55,12 +66,14 @@ MARK = {Outcome.PASS: "PASS", Outcome.FAIL: "FAIL", Outcome.KNOWN_DEVIATION: "KN
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run the conformance suite against a target",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--role", choices=("vehicle", "gcs"), default="vehicle",
-                   help="which side the target plays: vehicle (default; the MIS.* and HO.* clauses) or gcs "
-                        "(the suite plays the vehicle; the MIS.G.* clauses)")
+    p.add_argument("--role", choices=("vehicle", "gcs", "msp"), default=None,
+                   help="which side the target plays: vehicle (default; the MIS.* and HO.* clauses), gcs "
+                        "(the suite plays the vehicle; the MIS.G.* clauses) or msp (an MSP flight controller; "
+                        "the MSP.* clauses; implied by an MSP --target)")
     p.add_argument("--target", metavar="URI",
                    help=f"what to test: {FORMS} (default builtin:spec: our reference vehicle "
-                        f"over UDP loopback); with --role gcs: {gcs_suite.TARGET_FORMS} (default {gcs_suite.BUILTIN})")
+                        f"over UDP loopback); with --role gcs: {gcs_suite.TARGET_FORMS} (default {gcs_suite.BUILTIN}); "
+                        f"an MSP flight controller: {MSP_FORMS}")
     p.add_argument("--gcs-cmd", metavar="CMD",
                    help="with --role gcs: the GCS under test as a command run per operation, "
                         "'CMD {port} {op} {file}' (see above)")
@@ -104,9 +117,12 @@ def run(args: argparse.Namespace) -> int:
     """Exit 130 on SIGINT or SIGTERM, once the plans are back and the reports written (see
     the module docstring); SIGTERM before or after the run raises KeyboardInterrupt, which
     the command line also turns into 130."""
+    args.role = _role(args)
     with sigterm_as_interrupt():
         if args.role == "gcs":
             doc, outcome = _run_gcs(args)
+        elif args.role == "msp":
+            doc, outcome = _run_msp(args)
         else:
             _vehicle_only(args)
             options = document.RunOptions(target=args.target or "builtin:spec", clauses=args.clauses,
@@ -132,6 +148,35 @@ def run(args: argparse.Namespace) -> int:
                   "back and the reports written first", file=sys.stderr)
             return EXIT_INTERRUPTED
         return 0 if doc["summary"]["verdict"] == "pass" else 1
+
+
+def _role(args: argparse.Namespace) -> str:
+    """--role as given, or as the target implies (an MSP target is the msp role)."""
+    implied = "msp" if is_msp_target(args.target) else None
+    if args.role is None:
+        return implied or "vehicle"
+    if args.role == "msp" and args.target is not None and implied is None:
+        raise UsageError(f"--role msp: --target {args.target!r} is no MSP target ({MSP_FORMS})")
+    if implied and args.role != "msp":
+        raise UsageError(f"--target {args.target!r} is an MSP flight controller: its clauses are --role msp")
+    return args.role
+
+
+def _run_msp(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
+    """An MSP flight controller: the options of a MAVLink vehicle run that mean nothing here are refused."""
+    given = [flag for flag, value in (("--gcs-cmd", args.gcs_cmd),
+                                      ("--gcs-timeout", args.gcs_timeout != gcs_suite.DEFAULT_TIMEOUT_S),
+                                      ("--handover-scenario", args.handover_scenario),
+                                      ("--allow-flight", args.allow_flight), ("--profile", args.profile)) if value]
+    if given:
+        raise UsageError(f"{given[0]} is not for an MSP flight controller (--role msp)")
+    options = document.RunOptions(target=args.target or msp_target.BUILTIN, clauses=args.clauses,
+                                  strict=args.strict, time_scale=args.time_scale, seed=args.seed,
+                                  expectations=args.expect, baseline=args.baseline, role="msp")
+    prepared = msp_suite.prepare(options, levels=args.level, report_dir=args.report_dir)
+    print(f"mavconform: {len(prepared.clauses)} MSP clauses against {prepared.target}", flush=True)
+    return msp_suite.execute(prepared, restore=not args.no_restore,
+                             on_result=None if args.quiet else _printer())
 
 
 def _vehicle_only(args: argparse.Namespace) -> None:
@@ -173,11 +218,14 @@ def _printer():
 
 def _summary(doc: dict[str, Any], report_dir: str) -> None:
     from mavconform.reports.run_document import run_facts
-    from mavconform.reports.text import dropped_text, flight_endings, link_text, safety_alarm
+    from mavconform.reports.text import dropped_text, flight_endings, identity_text, link_text, safety_alarm
     s = doc["summary"]
     ident, timing = doc["identity"], run_facts(doc)
     where = f" at {timing['address']}" if timing["address"] else ""
-    who = f"system {ident['system']} component {ident['component']}{where}" if ident else "no HEARTBEAT"
+    if ident and "msp_api" in ident:
+        who = identity_text(ident, address=timing["address"])
+    else:
+        who = f"system {ident['system']} component {ident['component']}{where}" if ident else "no HEARTBEAT"
     print(f"\ntarget {doc['run']['target']} ({who}); {timing['duration_s']:.1f} s")
     print("  outcome          clauses")
     for name in ("pass", "fail", "known-deviation", "not-applicable", "skipped", "error"):

@@ -23,7 +23,9 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
                [link: {kind: in-process|udp|udpin|tcp|tcpin|serial, bytes_per_second (null: a
                        network link, not limited), reply_allowance_s: what the suite added to
                        each reply wait for the link's speed (harness/link_timing.py)}]}
-    identity  {system, component, [type, autopilot, mavlink_version, ...]} or null
+    identity  {system, component, [type, autopilot, mavlink_version, ...]} or null; an MSP
+              flight controller's: {msp_api: "2.5", max_waypoints, [msp_protocol, waypoints,
+              mission_valid]}
     summary   {total, <one count per outcome>, gating_failures, [left_armed],
                verdict: pass|fail|interrupted}
     gating    {mode: strict|default|baseline, regressions: [id], fixed: [id]}
@@ -370,8 +372,12 @@ class _Checker:
     def identity(self, identity: dict | None) -> None:
         if identity is None:
             return
-        self.key(identity, "system", "identity", "integer")
-        self.key(identity, "component", "identity", "integer")
+        if "msp_api" in identity:     # an MSP flight controller's (conformance/msp/runner.py)
+            self.key(identity, "msp_api", "identity", "string")
+            self.key(identity, "max_waypoints", "identity", "integer")
+        else:
+            self.key(identity, "system", "identity", "integer")
+            self.key(identity, "component", "identity", "integer")
         if not self.old:
             self.moved(identity, MOVED_IDENTITY, "identity")
         known = {**IDENTITY_KNOWN, "address": ("string", "null")} if self.old else IDENTITY_KNOWN

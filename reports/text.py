@@ -99,6 +99,10 @@ def identity_text(identity: dict[str, Any] | None, missing: str = "no answer fro
     """"system 1 component 1, type 2, autopilot 4, MAVLink 2, at 127.0.0.1:40001"."""
     if identity is None:
         return missing
+    if "msp_api" in identity:     # an MSP flight controller (conformance/msp/runner.py)
+        parts = [f"MSP API {identity['msp_api']}", f"{identity.get('max_waypoints')} waypoints at most"]
+        address = address or identity.get("address")
+        return ", ".join(parts + ([f"at {one_line(str(address))}"] if address else []))
     parts = [f"system {identity['system']} component {identity['component']}"]
     for key, word in (("type", "type"), ("autopilot", "autopilot"),
                       ("mavlink_version", "MAVLink")):
@@ -140,14 +144,15 @@ def link_text(doc: dict[str, Any]) -> str | None:
     each reply wait + 0.275 s; 1 connection"; None for an in-process target (or a run
     document from before links were recorded)."""
     link = doc["run"].get("link")
+    events = (doc.get("volatile") or {}).get("link")
+    msp = msp_stream_text(events.get("msp") if events else None)
     if not link or link.get("kind") == "in-process":
-        return None
+        return msp
     rate = link.get("bytes_per_second")
     if rate is None:
         said = f"{link['kind']} (a network link: reply waits are the protocol's)"
     else:
         said = f"{link['kind']} at {rate:g} bytes/s: each reply wait + {link['reply_allowance_s']:g} s"
-    events = (doc.get("volatile") or {}).get("link")
     if events:
         lost = sum(1 for e in events.get("history", []) if e["event"].startswith(("closed", "read failed",
                                                                                   "write failed")))
@@ -156,7 +161,19 @@ def link_text(doc: dict[str, Any]) -> str | None:
         dropped = events.get("frames_dropped_link_down", 0)
         if dropped:
             said += f", {dropped} frame{'' if dropped == 1 else 's'} sent while it was down"
-    return said
+    return said + (f"; {msp}" if msp else "")
+
+
+def msp_stream_text(stats: dict[str, Any] | None) -> str | None:
+    """What the MSP reader skipped in a flight controller's stream, for people ("MSP stream:
+    31 bytes outside any frame, 2 bad checksums"); None if it skipped nothing."""
+    if not stats:
+        return None
+    names = (("garbage_bytes", "byte outside any frame", "bytes outside any frame"),
+             ("bad_checksum", "bad checksum", "bad checksums"), ("bad_header", "bad header", "bad headers"),
+             ("oversize", "oversize frame", "oversize frames"), ("truncated", "cut-off frame", "cut-off frames"))
+    parts = [f"{stats[k]} {one if stats[k] == 1 else many}" for k, one, many in names if stats.get(k)]
+    return "MSP stream: " + ", ".join(parts) if parts else None
 
 
 def flight_endings(doc: dict[str, Any]) -> list[str]:

@@ -15,7 +15,7 @@ from typing import Iterable
 from ..clause import Clause
 from ..harness.exchange import Exchange
 from ..outcome import ClauseResult, Outcome
-from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check
+from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check, skip_undecided
 from .checks import GCS_CHECKS
 from .harness import GcsHarness
 
@@ -49,13 +49,7 @@ def run_gcs_clauses(h: GcsHarness, clauses: Iterable[Clause], *, on_result: OnRe
         if guard is not None:
             guard.hold()
         interrupted = True
-        by = f" ({guard.first})" if guard is not None and guard.first else ""
-        done = {r.clause_id for r in results}
-        for clause in clauses:
-            if clause.id not in done:
-                record(clause, ClauseResult(clause.id, Outcome.SKIPPED,
-                                            f"interrupted{by} while it ran: not decided" if clause.id == phase
-                                            else f"not run: the run was interrupted{by} during {phase}"))
+        skip_undecided(clauses, results, phase, guard.first if guard is not None else None, record)
     first = next((op for op in h.operations if op.gcs is not None), None)
     identity = None if first is None else {"system": first.gcs[0], "component": first.gcs[1],
                                            "gcs": h.adapter.describe()}

@@ -88,15 +88,22 @@ class MspFlightController:
         if len(payload) != 21:
             return None
         wp = Waypoint.unpack(payload)
-        n = wp.number
-        if not 1 <= n <= self.max_waypoints or wp.action not in ACTIONS or n not in (1, len(self.waypoints) + 1):
+        if not self.takes(wp):
             self.stats.ignored_waypoints += 1
             return b""
-        if n == 1:
+        self.store(wp)
+        return b""
+
+    def takes(self, wp: Waypoint) -> bool:
+        """Whether setWaypoint takes `wp` into the mission: number 1 or count + 1, a known action."""
+        return (1 <= wp.number <= self.max_waypoints and wp.action in ACTIONS
+                and wp.number in (1, len(self.waypoints) + 1))
+
+    def store(self, wp: Waypoint) -> None:
+        if wp.number == 1:
             self.waypoints = []
         self.waypoints.append(wp)
         self.valid = wp.flag == FLAG_LAST
-        return b""
 
     def _save(self, payload: bytes) -> bytes | None:
         if len(payload) != 1 or not self.valid:

@@ -8,9 +8,12 @@ after the one it started at, so a frame hidden behind a bad header is still foun
 own parser, msp_serial.c:84-262, goes back to IDLE at the failing byte instead; it is the
 flight controller's side, this one also reads replies and error frames).
 
-A frame whose declared size exceeds `max_payload` is refused at its header (INAV refuses
-requests over MSP_PORT_INBUF_SIZE so, msp_serial.c:141, 189, 228); bytes that end the stream
-inside a frame are `pending` until `close`, which counts them as truncated.
+A `$` whose frame is still incomplete is given up for a later frame that is already whole
+with a good checksum (`_complete_later`): line noise that looks like a header must not hold
+back the replies behind it. A frame whose declared size exceeds `max_payload` is refused at
+its header (INAV refuses requests over MSP_PORT_INBUF_SIZE so, msp_serial.c:141, 189, 228);
+bytes that end the stream inside a frame are `pending` until `close`, which counts them as
+truncated.
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ class MspParser:
         self.max_payload = max_payload
         self.stats = ParserStats()
         self._buf = bytearray()
+        self._probing = False      # looking ahead (_complete_later): nothing is counted
 
     @property
     def pending(self) -> int:
@@ -68,7 +72,12 @@ class MspParser:
             try:
                 frame, used = self._parse()
             except _Need:
-                break
+                later = self._complete_later()
+                if later is None:
+                    break
+                self._fail("bad_header", "a frame start whose frame never came (a later frame was whole)")
+                self._skip(later)    # the false start and what follows it, up to the whole frame
+                continue
             if frame is None:
                 del self._buf[:1]        # rescan from the byte after this `$`
                 continue
@@ -131,6 +140,30 @@ class MspParser:
             return self._bad("bad_checksum", f"v2 command {command}: CRC-8"), 0
         return MspFrame(command, bytes(b[at + 5:stop]), direction, version, flag), stop + 1
 
+    def _complete_later(self) -> int | None:
+        """While the frame at the buffer's start waits for bytes: the offset of a later `$`
+        that starts a whole frame with a good checksum, if any. A noise byte that looks like a
+        header with a large size would otherwise swallow the replies behind it until that
+        many more bytes came (INAV's parser has that weakness; a client waiting on one reply
+        must not)."""
+        whole = bytes(self._buf)
+        at = whole.find(b"$", 1)
+        self._probing = True
+        try:
+            while at > 0:
+                self._buf = bytearray(whole[at:])
+                try:
+                    frame, _ = self._parse()
+                except _Need:
+                    frame = None
+                if frame is not None:
+                    return at
+                at = whole.find(b"$", at + 1)
+            return None
+        finally:
+            self._buf = bytearray(whole)
+            self._probing = False
+
     # --- bookkeeping -------------------------------------------------------------------------
     def _need(self, n: int) -> None:
         if len(self._buf) < n:
@@ -141,6 +174,8 @@ class MspParser:
         return None
 
     def _fail(self, kind: str, why: str) -> None:
+        if self._probing:
+            return
         setattr(self.stats, kind, getattr(self.stats, kind) + 1)
         self.stats.last_error = why
 

@@ -93,8 +93,12 @@ class McapCapture:
     no clock; tests inject a fixed one."""
 
     def __init__(self, path: str | os.PathLike[str], *, dialect: Any = None,
-                 wall_clock: Callable[[], float] = time.time, compress: bool = True) -> None:
+                 wall_clock: Callable[[], float] = time.time, compress: bool = True,
+                 frames: Callable[[CaptureRecord], list[dict[str, Any]]] | None = None) -> None:
         self.path = os.fspath(path)
+        # another protocol's frames (MSP: reference_impl/msp/capture.py): the record's bodies
+        # (msg, msgid, fields, error, raw; the rest null) instead of MAVLink's
+        self._frames = frames
         self._wall_clock = wall_clock
         self._decoder = FrameDecoder(dialect=dialect)
         self._in_flight = InFlight()
@@ -167,6 +171,13 @@ class McapCapture:
 
     def _write_frames(self, channel: int, record: CaptureRecord, log_time: int) -> None:
         src, dst = address_label(record.src), address_label(record.dst)
+        if self._frames is not None:
+            for index, described in enumerate(self._frames(record)):
+                body = {"time": record.time, "kind": record.kind, "src": src, "dst": dst, "frame_index": index,
+                        "datagram_len": len(record.data), "msgid": None, "sysid": None, "compid": None,
+                        "seq": None, "version": None, "signature": None, "error": None, **described}
+                self._add(channel, log_time, _ns(record.time), body)
+            return
         items: list[Any] = list(self._decoder.feed(record.data))
         if not items:
             items = [DecodeError("empty datagram", b"")]

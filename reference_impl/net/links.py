@@ -36,12 +36,13 @@ def stream_peer(uri: TcpUri | SerialUri) -> str:
 
 
 def attach(driver: Any, node: DatagramNode, uri: LinkUri, *, listen: bool = False,
-           outgoing: Any = None, incoming: Any = None) -> tuple[Address | None, Address]:
+           outgoing: Any = None, incoming: Any = None, framer: Any = None) -> tuple[Address | None, Address]:
     """Put `node` on `uri`'s link; (the peer's address if known now, our own address).
 
     `listen`: the address is where we listen even if it is udp: (vehicle/proxy --listen).
     For udp: the peer is the address given; for udpin: it is learnt from what arrives
-    (None here); a stream link has one peer, known from the start."""
+    (None here); a stream link has one peer, known from the start. `framer`: how a stream
+    is cut into datagrams (UdpDriver.add_stream; default MAVLink frames)."""
     if isinstance(uri, UdpUri):
         if uri.mode == "udpin" or listen:
             own = driver.add_node(node, bind=uri.address, outgoing=outgoing, incoming=incoming)
@@ -49,7 +50,7 @@ def attach(driver: Any, node: DatagramNode, uri: LinkUri, *, listen: bool = Fals
         own = driver.add_node(node, bind=(local_bind_for(uri.host), 0), outgoing=outgoing, incoming=incoming)
         return uri.address, own
     link = open_stream(uri, driver.clock.now())
-    driver.add_stream(node, link, outgoing=outgoing, incoming=incoming)
+    driver.add_stream(node, link, outgoing=outgoing, incoming=incoming, framer=framer)
     return link.peer, link.local
 
 

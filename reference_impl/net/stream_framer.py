@@ -59,3 +59,16 @@ class StreamFramer:
         counts = (self.frames, self.bad, self.skipped)
         self.__init__(self._parser.table)
         self.frames, self.bad, self.skipped = counts
+
+
+class PassThrough:
+    """A framer for a node that frames the stream itself (MSP, reference_impl/msp): each
+    read goes to the node as it came; nothing is counted here."""
+
+    frames = bad = skipped = 0
+
+    def feed(self, data: bytes) -> list[bytes]:
+        return [data]
+
+    def reset(self) -> None:
+        pass

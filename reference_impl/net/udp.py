@@ -32,7 +32,7 @@ import selectors
 import socket
 from heapq import heappop, heappush
 from itertools import count
-from typing import Callable
+from typing import Any, Callable
 
 from ..errors import UsageError
 from .clock import Clock, MonotonicClock
@@ -67,12 +67,13 @@ class _StreamEndpoint:
                  "framer", "generation")
 
     def __init__(self, node: DatagramNode, link: StreamLink, outgoing: FaultModel | None,
-                 incoming: FaultModel | None, rng_out: random.Random, rng_in: random.Random) -> None:
+                 incoming: FaultModel | None, rng_out: random.Random, rng_in: random.Random,
+                 framer: Any) -> None:
         self.node, self.link, self.address = node, link, link.local
         self.outgoing, self.incoming = outgoing, incoming
         self.rng_out, self.rng_in = rng_out, rng_in
         self.queue = ReceiveQueue(None, counted=link.kind in ("tcp", "tcpin"))
-        self.framer = StreamFramer()
+        self.framer = framer
         self.generation = link.generation
 
 
@@ -124,15 +125,18 @@ class UdpDriver:
         return address  # type: ignore[return-value]
 
     def add_stream(self, node: DatagramNode, link: StreamLink, *, outgoing: FaultModel | None = None,
-                   incoming: FaultModel | None = None) -> None:
-        """Run `node` on a stream link (which the driver then owns and closes)."""
+                   incoming: FaultModel | None = None, framer: Any = None) -> None:
+        """Run `node` on a stream link (which the driver then owns and closes). `framer` cuts
+        what arrives into datagrams (default: MAVLink frames, stream_framer.py; an MSP node
+        takes the bytes as they come, `PassThrough`, and frames them itself)."""
         self._check_open()
         if incoming is not None and incoming is outgoing:
             incoming = outgoing.copy()
         index = len(self._nodes)
         ep = _StreamEndpoint(node, link, outgoing, incoming,
                              random.Random(stable_seed(self.seed, index, "out")),
-                             random.Random(stable_seed(self.seed, index, "in")))
+                             random.Random(stable_seed(self.seed, index, "in")),
+                             framer if framer is not None else StreamFramer())
         self._streams.append(ep)
         self._nodes.append(ep)
 

@@ -26,7 +26,7 @@ def test_every_gcs_clause_has_exactly_one_check_and_every_gcs_check_a_clause() -
 
 
 def test_ids_are_unique_well_formed_and_grouped() -> None:
-    assert len(catalogue.BY_ID) == len(catalogue.CLAUSES) + len(catalogue.GCS_CLAUSES)
+    assert len(catalogue.BY_ID) == len(catalogue.CLAUSES) + len(catalogue.GCS_CLAUSES) + len(catalogue.MSP_CLAUSES)
     assert 40 <= len(catalogue.CLAUSES) <= 90
     assert all(c.role is Role.VEHICLE for c in catalogue.CLAUSES)
     assert all(c.role is Role.GCS and c.id.startswith("MIS.G.") for c in catalogue.GCS_CLAUSES)

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mavconform.reference_impl.msp.commands import COMMANDS, FLAG_LAST, Waypoint, WaypointInfo
-from mavconform.reference_impl.msp.frame import MspFrame, Version, crc8_dvb_s2, encode
+from mavconform.reference_impl.msp.frame import FROM_FC, MspFrame, Version, crc8_dvb_s2, encode
 from mavconform.reference_impl.msp.parser import MspParser
 
 
@@ -110,3 +110,16 @@ def test_waypoint_records_are_21_bytes_and_round_trip():
 def test_a_frame_that_cannot_be_sent_is_refused_when_built(bad):
     with pytest.raises(ValueError):
         MspFrame(**{"command": 1, **bad})
+
+
+def test_a_false_frame_start_does_not_hold_back_the_frames_behind_it():
+    """Noise that reads as `$M>` with a size of 5 would wait for 6 more bytes and swallow the
+    reply behind it (INAV's own parser would); a later whole frame wins instead."""
+    reply = encode(MspFrame(209, b"", FROM_FC))              # MSP_SET_WP's empty `>`: 6 bytes
+    parser = MspParser()
+    assert parser.feed(b"\x00$M>\x05" + reply) == [MspFrame(209, b"", FROM_FC)]
+    assert parser.stats.bad_header == 1 and parser.pending == 0
+    split = MspParser()                                       # a frame merely split is still waited for
+    whole = encode(MspFrame(118, bytes(range(21)), FROM_FC))
+    assert split.feed(whole[:10]) == [] and split.feed(whole[10:]) == [MspFrame(118, bytes(range(21)), FROM_FC)]
+    assert split.stats.problems() == 0
