@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-msp run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
+.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-msp run-msp-bridge run-msp-bridge-clients run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -43,6 +43,19 @@ setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk whe
 run-msp: setup       ## the MSP clauses vs builtin:msp (INAV's waypoint store) over TCP loopback -> reports/msp/
 	$(BIN)/mavconform run --target builtin:msp --report-dir reports/msp -q
 
+# run-msp-bridge: the MAVLink suite through `mavconform bridge` to builtin:msp; expectations/msp-bridge.toml
+# lists what MSP cannot do (each entry names its row of docs/msp-mapping.md)
+BRIDGE_OUT := reports/msp-bridge
+
+run-msp-bridge: setup  ## the MAVLink suite through the MSP bridge to builtin:msp, with expectations/msp-bridge.toml
+	@mkdir -p $(BRIDGE_OUT); \
+	$(BIN)/mavconform bridge --msp builtin --listen udpin:0 --duration 600 >$(BRIDGE_OUT)/bridge.out 2>&1 & pid=$$!; \
+	trap 'kill $$pid 2>/dev/null' EXIT; \
+	for i in $$(seq 100); do grep -q 'listening on' $(BRIDGE_OUT)/bridge.out && break; kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
+	target=$$(sed -n 's/.*listening on \(udp:127\.0\.0\.1:[0-9]*\);.*/\1/p' $(BRIDGE_OUT)/bridge.out); \
+	if [ -z "$$target" ]; then echo "run-msp-bridge: the bridge did not start:" >&2; cat $(BRIDGE_OUT)/bridge.out >&2; exit 1; fi; \
+	timeout 600 $(BIN)/mavconform run --target $$target --expect msp-bridge --report-dir $(BRIDGE_OUT) -q
+
 run-msp-interop: $(VENV)/.interop-installed  ## the MSP codec against yamspy (tests/interop/test_yamspy_msp.py)
 	$(BIN)/python -m pytest -q -p no:cacheprovider tests/interop/test_yamspy_msp.py
 
@@ -72,6 +85,10 @@ $(MAVPROXY_VENV)/.installed:
 	$(MAVPROXY_VENV)/bin/python -m pip install --quiet --upgrade pip
 	$(MAVPROXY_VENV)/bin/python -m pip install --quiet MAVProxy==1.8.75
 	touch $@
+
+run-msp-bridge-clients: $(VENV)/.interop-installed $(MAVPROXY_VENV)/.installed  ## MAVSDK and MAVProxy upload, download and clear through the MSP bridge to builtin:msp
+	$(BIN)/python tools/gcs_through_bridge.py --gcs mavsdk --out reports/msp-bridge-mavsdk
+	$(BIN)/python tools/gcs_through_bridge.py --gcs mavproxy --out reports/msp-bridge-mavproxy
 
 run-gcs: setup       ## the GCS clauses vs the reference GCS over UDP loopback -> reports/gcs/
 	$(BIN)/mavconform run --role gcs --target builtin:gcs --report-dir reports/gcs -q

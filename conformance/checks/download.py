@@ -37,10 +37,33 @@ def _end(t: Tester, result: MissionResult = MissionResult.ACCEPTED) -> None:
     t.send(m.ack_message(result, MISSION, t.target))
 
 
+PARAM_REFUSALS = frozenset({MissionResult.INVALID_PARAM1, MissionResult.INVALID_PARAM2,
+                            MissionResult.INVALID_PARAM3, MissionResult.INVALID_PARAM4})
+
+
 def _detailed(n: int, variant: int) -> list[MissionItem]:
     """Waypoints whose params are not all zero (acceptance radius, yaw), so a download that
     loses a field shows it."""
     return [replace(it, param2=2.0 + it.seq, param4=90.0) for it in plans.mission(n, variant)]
+
+
+def _detailed_or_plain(t: Tester, n: int, variant: int) -> tuple[list[MissionItem], str]:
+    """Upload `_detailed` waypoints; a target that refuses a param it cannot store
+    (MAV_MISSION_INVALID_PARAMn, as the spec lets it: an MSP flight controller has no slot for
+    acceptance radius or yaw) gets the plain ones, and the clause's detail says so."""
+    items = _detailed(n, variant)
+    frame = procedures.upload(t, items, MISSION)
+    refused = frame is not None and frame.msg.type in PARAM_REFUSALS
+    if refused:
+        items = plans.mission(n, variant)
+        note = (f"the target refused waypoints with params 2 and 4 set ({procedures.result_name(frame.msg.type)}): "
+                "checked with params 0")
+        t.note(note)
+        procedures.ensure_plan(t, items, MISSION)
+        return items, note
+    if frame is None or frame.msg.type != MissionResult.ACCEPTED:
+        procedures.ensure_plan(t, items, MISSION)   # says why it is undecided
+    return items, ""
 
 
 def _check_count(t: Tester, items: list[MissionItem]) -> int:
@@ -107,10 +130,9 @@ def _fetch(t: Tester, n: int) -> list[MissionItem] | None:
 
 
 @check("MIS.DN.02")
-def request_int_draws_item_int(s: Session) -> None:
+def request_int_draws_item_int(s: Session) -> str:
     t = s.t
-    items = _detailed(3, variant=12)
-    procedures.ensure_plan(t, items, MISSION)
+    items, note = _detailed_or_plain(t, 3, variant=12)
     _check_count(t, items)
     for want in items:
         _request(t, want.seq)
@@ -121,6 +143,7 @@ def request_int_draws_item_int(s: Session) -> None:
                                f"{_describe(got) if got else 'an unreadable item'}; expected the "
                                f"stored item {_describe(want)}")
     _end(t)
+    return note
 
 
 def _float_matches(frame_msg, want: MissionItem, form: StoredForm) -> bool:

@@ -1,9 +1,7 @@
 """One MSP conformance session: the link to the flight controller and the suite's client on it.
 
-An in-process target (`builtin:msp`, a mutant) is served over real TCP loopback: a listener
-on 127.0.0.1 at a port the OS picks and a client connected to it, both run by one UDP
-driver (reference_impl/net/udp.py) in this thread, so the bytes cross the kernel as they
-would to a SITL. In virtual time (the tool's own tests) the two nodes sit on a SimNetwork.
+An in-process target (`builtin:msp`, a mutant) is served over real TCP loopback
+(reference_impl/msp/links.py), so the bytes cross the kernel as they would to a SITL. In virtual time (the tool's own tests) the two nodes sit on a SimNetwork.
 An external target is reached over the link its URI names; a TCP client reconnects on its
 own bounded back-off, and a link that never comes up is a target that does not answer.
 """
@@ -14,19 +12,14 @@ from typing import Any
 
 from mavconform.reference_impl.msp.nodes import MspClientNode, MspServerNode
 from mavconform.reference_impl.net.clock import SimClock
-from mavconform.reference_impl.net.links import attach, stream_of
+from mavconform.reference_impl.msp.links import connect
+from mavconform.reference_impl.net.links import stream_of
 from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
-from mavconform.reference_impl.net.stream_framer import PassThrough
-from mavconform.reference_impl.net.tcp_link import TcpClientLink, TcpServerLink
 from mavconform.reference_impl.net.udp import UdpDriver
 
 from ..harness.link_timing import link_facts
 from .target import MspTarget
 from .tester import MspTester
-
-CONNECT_TIMEOUT = 3.0     # s for a TCP link to come up before the first request
-LOOPBACK = "127.0.0.1"
-
 
 def build_server(target: MspTarget) -> MspServerNode:
     """The in-process flight controller `target` names."""
@@ -62,21 +55,7 @@ class MspSession:
         self.scale = scale
 
     def _open_real(self) -> None:
-        now = self.driver.clock.now()
-        if self.server is not None:
-            listener = TcpServerLink(LOOPBACK, 0, now)
-            self.driver.add_stream(self.server, listener, framer=PassThrough())
-            client = TcpClientLink(LOOPBACK, listener.address[1], now)
-            self.driver.add_stream(self.node, client, framer=PassThrough())
-            self.node.peer = client.peer
-        else:
-            assert self.target.link is not None
-            peer, _ = attach(self.driver, self.node, self.target.link, framer=PassThrough())
-            self.node.peer = peer
-        link = stream_of(self.driver, self.node)
-        if link is not None:   # before the first request: a request sent while down is lost
-            self.driver.run_until(lambda: link.up, timeout=CONNECT_TIMEOUT)
-            self.node.peer = link.peer
+        connect(self.driver, self.node, self.target.link, server=self.server)
 
     @property
     def stream(self) -> Any:

@@ -50,6 +50,10 @@ COMMANDS: dict[str, Command] = {c.name: c for c in (
     Command("MSP_NAV_STATUS", 121, "", "<BBBBBh", f"{INAV}/msp/msp_protocol.h:252; fc/fc_msp.c:990-997",
             "mode, state, active waypoint action, active waypoint number, error, heading-hold target "
             "(seed 004: target_bearing)"),
+    Command("MSP2_INAV_SET_WP_INDEX", 0x2221, "<B", "", f"{INAV}/msp/msp_protocol_v2_inav.h:132; fc/fc_msp.c:3814-3823",
+            "MSP v2 only: the 0-based index of the waypoint to fly to; taken only while armed and flying a "
+            "WP mission (navigation.c:3895-3907), else `!` (seed 004 maps MISSION_SET_CURRENT onto "
+            "MSP_SET_WP's wp_no, which INAV takes as a waypoint to store)"),
     Command("MSP_SET_WP", 209, WAYPOINT_FORMAT, "", f"{INAV}/msp/msp_protocol.h:268; fc/fc_msp.c:3082-3112",
             "the 21-byte record; answered `>` even when setWaypoint ignored it (only a size other than "
             "21 is `!`), so only a read-back tells"),

@@ -16,6 +16,8 @@ replays each answer) and where INAV's source says so:
 - MSP_WP_MISSION_SAVE / LOAD take a 1-byte mission id (else `!`); a save of a list that is
   not valid is refused (`!`); a load takes the saved list, or empties the list and fails
   (`!`) if none valid was saved (navigation.c:4131-4193).
+- MSP2_INAV_SET_WP_INDEX is answered `!`: INAV takes it only while armed flying a WP
+  mission (navigation.c:3895-3907), and this model never flies.
 - A command it does not know is answered `!`; a reply uses the request's framing (v1, v2,
   v2 inside v1).
 """
@@ -60,6 +62,7 @@ class MspFlightController:
             CODES["MSP_NAV_STATUS"]: lambda p: self.nav_status,
             CODES["MSP_WP_MISSION_SAVE"]: self._save,
             CODES["MSP_WP_MISSION_LOAD"]: self._load,
+            CODES["MSP2_INAV_SET_WP_INDEX"]: lambda p: None,   # never armed in a WP mission here
         }
 
     def info(self) -> WaypointInfo:

@@ -33,6 +33,7 @@ NAV_C = "INAV 9.1 src/main/navigation/navigation.c"
 
 @dataclass(frozen=True)
 class Row:
+    id: str               # what an expectations entry of the bridge names (its `variant`)
     mavlink: str
     msp: str
     seed: str             # what seed 004 says
@@ -69,45 +70,70 @@ ACTIONS: dict[int, Action] = {a.command: a for a in (
 BY_ACTION = {a.action: a for a in ACTIONS.values()}
 
 ROWS: tuple[Row, ...] = (
-    Row("seq (u16, 0..n-1)", "wp_no (u8, 1..n)", f"{SEED}: seq u16 <-> wp_no u8, partially",
+    Row("seq", "seq (u16, 0..n-1)", "wp_no (u8, 1..n)", f"{SEED}: seq u16 <-> wp_no u8, partially",
         f"number 0 is home, 1..{MAX_WAYPOINTS} the mission, 254/255 special ({NAV_C}:3957-3988)",
         "INAV", "wp_no = seq + 1", f"more than {MAX_WAYPOINTS} items: NO_SPACE"),
-    Row("command", "action", f"{SEED}: no action table",
+    Row("command", "command", "action", f"{SEED}: no action table",
         f"WAYPOINT 1, HOLD_TIME 3, RTH 4, SET_POI 5, JUMP 6, SET_HEAD 7, LAND 8 ({NAV_H}:520-526)",
         "INAV", "NAV_WAYPOINT 1, NAV_LOITER_TIME 3, NAV_RETURN_TO_LAUNCH 4, DO_SET_ROI_LOCATION 5, "
         "DO_JUMP 6, CONDITION_YAW 7, NAV_LAND 8", "any other command: UNSUPPORTED"),
-    Row("x, y (i32 degE7)", "lat, lon (i32 deg*1e7)", f"{SEED}: i32 in one table, u32 in another",
+    Row("position", "x, y (i32 degE7)", "lat, lon (i32 deg*1e7)", f"{SEED}: i32 in one table, u32 in another",
         f"int32_t, written with sbufWriteU32 ({NAV_H}:549-556; fc/fc_msp.c:1931-1932)", "INAV",
         "the same integer", "nothing (a non-positional action sends 0: x, y must be 0)"),
-    Row("z (float, m)", "alt (i32, cm)", f"{SEED}: z float <-> altitude i32, partially",
+    Row("altitude", "z (float, m)", "alt (i32, cm)", f"{SEED}: z float <-> altitude i32, partially",
         f"centimetres, relative or AMSL by p3 bit 0 ({NAV_DOC})", "INAV",
         "alt = z * 100", "an altitude that is not whole centimetres (as float32): INVALID_PARAM7"),
-    Row("frame", "p3 bit 0", f"{SEED}: param3 <-> p3",
+    Row("frame", "frame", "p3 bit 0", f"{SEED}: param3 <-> p3",
         f"p3 is a bitfield; bit 0: altitude AMSL (1) or relative to home (0) ({NAV_DOC})", "INAV",
         "GLOBAL(_INT) -> 1, GLOBAL_RELATIVE_ALT(_INT) -> 0; MISSION for a non-positional action",
         "any other frame: UNSUPPORTED_FRAME; p3 bits 1-4 (user actions) have no MAVLink field"),
-    Row("param1", "p1 (i16)", f"{SEED}: param1 f <-> p1 u16, partially",
+    Row("param1", "param1", "p1 (i16)", f"{SEED}: param1 f <-> p1 u16, partially",
         f"int16_t ({NAV_H}:553): HOLD_TIME seconds, JUMP target number, SET_HEAD degrees (-1 cancels), "
         f"WAYPOINT speed cm/s, RTH land flag ({NAV_DOC})", "INAV",
         "HOLD_TIME, SET_HEAD: p1 = param1; JUMP: p1 = param1 + 1 (a number, not a seq); others 0",
         "not integral or outside -32768..32767, or set where the action has no slot: INVALID_PARAM1"),
-    Row("param2", "p2 (i16)", f"{SEED}: param2 f <-> p2 u16, partially",
+    Row("param2", "param2", "p2 (i16)", f"{SEED}: param2 f <-> p2 u16, partially",
         f"JUMP repeat count ({NAV_DOC})", "INAV", "JUMP: p2 = param2; others 0",
         "as param1: INVALID_PARAM2"),
-    Row("param3", "p3 (i16)", f"{SEED}: param3 f <-> p3 u16 (one table says i32)",
+    Row("param3", "param3", "p3 (i16)", f"{SEED}: param3 f <-> p3 u16 (one table says i32)",
         f"p3 holds the altitude datum and user bits ({NAV_DOC})", "INAV", "none: param3 must be 0",
         "a non-zero param3: INVALID_PARAM3"),
-    Row("param4", "(none)", f"{SEED}: not mapped", "no slot", "both", "none: param4 must be 0 or NaN",
+    Row("param4", "param4", "(none)", f"{SEED}: not mapped", "no slot", "both", "none: param4 must be 0 or NaN",
         "another param4: INVALID_PARAM4"),
-    Row("autocontinue", "(none)", f"{SEED}: not mapped",
+    Row("autocontinue", "autocontinue", "(none)", f"{SEED}: not mapped",
         "INAV flies on from every waypoint (its MAVLink side refuses 0: telemetry/mavlink.c:1110)", "INAV",
         "must be 1", "autocontinue 0: UNSUPPORTED"),
-    Row("current", "(none)", f"{SEED}: MISSION_SET_CURRENT <-> MSP_SET_WP wp_no", "no stored field",
+    Row("current", "current", "(none)", f"{SEED}: MISSION_SET_CURRENT <-> MSP_SET_WP wp_no", "no stored field",
         "INAV", "not stored; comes back 0", "the flag (set-current is its own operation)"),
-    Row("last item", "flag (u8)", f"{SEED}: flag, partially",
+    Row("last-item", "last item", "flag (u8)", f"{SEED}: flag, partially",
         f"0xA5 marks the last waypoint; the list is valid only then ({NAV_H}:537; {NAV_C}:4001)", "INAV",
         "flag = 0xA5 on item n-1, else 0", "nothing"),
+    Row("plan-types", "mission_type", "(none)", f"{SEED}: not mapped", "MSP holds one waypoint mission", "both",
+        "MAV_MISSION_TYPE_MISSION only", "a fence or rally plan: UNSUPPORTED"),
+    Row("empty-mission", "an empty mission (MISSION_CLEAR_ALL, MISSION_COUNT 0)",
+        "waypoint 1: RTH of zeros, flag 0xA5", f"{SEED}: not mapped",
+        "no MSP command empties the list (only the CLI's `wp reset` and MAVLink's MISSION_CLEAR_ALL call "
+        "resetWaypointList: fc/cli.c:1901, telemetry/mavlink.c:1026); the MultiWii NAV convention "
+        "(mwptools' MSP notes) stores one RTH flagged 0xA5 for \"no mission\", which is also what MSP_WP "
+        "returns for a waypoint that does not exist (navigation.c:3822-3830)", "INAV",
+        "a clear writes that record; that record alone reads back as no mission",
+        "a mission of exactly one plain NAV_RETURN_TO_LAUNCH: UNSUPPORTED (it would read back as empty)"),
+    Row("set-current", "MISSION_SET_CURRENT seq, MAV_CMD_DO_SET_MISSION_CURRENT",
+        "MSP2_INAV_SET_WP_INDEX (v2, u8 index)", f"{SEED}: MISSION_SET_CURRENT seq <-> MSP_SET_WP wp_no",
+        "MSP_SET_WP n stores waypoint n; the index is set by MSP2_INAV_SET_WP_INDEX, taken only while armed "
+        "flying a WP mission (msp_protocol_v2_inav.h:132; navigation.c:3895-3907)", "INAV", "index = seq",
+        "on the ground: refused (STATUSTEXT; the command: TEMPORARILY_REJECTED), MISSION_CURRENT unchanged"),
+    Row("heartbeat", "HEARTBEAT type, mavlink_version", "(none)",
+        f"{SEED}: type <- MSP_IDENT (100) MULTITYPE, mavlink version <- MSP_IDENT MSP VERSION",
+        "INAV 9.1 has no MSP_IDENT (msp/msp_protocol.h defines none; a request is answered `!`)", "INAV",
+        "the bridge's HEARTBEAT: MAV_TYPE_GENERIC, MAV_AUTOPILOT_GENERIC_MISSION_FULL, MAVLink 2",
+        "the vehicle's type"),
+    Row("mission-current", "MISSION_CURRENT seq", "MSP_NAV_STATUS active waypoint number (u8)",
+        f"{SEED}: MISSION_CURRENT seq <-> MSP_WP wp_no",
+        "activeWpNumber = active index + 1 (navigation.c:2701-2702), sent by MSP_NAV_STATUS (fc/fc_msp.c:990-997)",
+        "INAV", "seq = number - 1 (number 0: seq 0)", "nothing"),
 )
+ROW_IDS = frozenset(r.id for r in ROWS)
 
 
 @dataclass(frozen=True)
@@ -192,9 +218,9 @@ def render_markdown() -> str:
            "Generated from `reference_impl/msp/mapping.py` (`python -m mavconform.reference_impl.msp.mapping`): "
            "each row says what seed 004 claims, what INAV 9.1 does and which the code follows. An item that "
            "does not fit is refused with the MISSION_ACK error in the last column, never changed.", "",
-           "| MAVLink | MSP | seed 004 | INAV 9.1 | follows | conversion | lost or refused |",
-           "|---|---|---|---|---|---|---|"]
-    out += [f"| {r.mavlink} | {r.msp} | {r.seed} | {r.inav} | {r.follows} | {r.conversion} | {r.lost} |"
+           "| row | MAVLink | MSP | seed 004 | INAV 9.1 | follows | conversion | lost or refused |",
+           "|---|---|---|---|---|---|---|---|"]
+    out += [f"| `{r.id}` | {r.mavlink} | {r.msp} | {r.seed} | {r.inav} | {r.follows} | {r.conversion} | {r.lost} |"
             for r in ROWS]
     out += ["", "| MAV_CMD | INAV action | location | p1 | p2 |", "|--:|--:|---|---|---|"]
     for a in ACTIONS.values():

@@ -150,6 +150,9 @@ class SimNetwork:
         # here and re-read only for the node that was stepped.
         deadlines = [node.next_deadline() for _, node in nodes]
         index = {id(node): i for i, (_, node) in enumerate(nodes)}
+        # nodes that share state (a bridge's two sides, msp/bridge.py: `coupled`): stepping one
+        # may give the other something to send or a new deadline
+        partners = [[index[id(p)] for p in getattr(node, "coupled", ()) if id(p) in index] for _, node in nodes]
         steps = 0
         while steps < max_steps:
             t_dead = _INF
@@ -176,6 +179,9 @@ class SimNetwork:
                 i = index[id(node)]
                 deadlines[i] = node.next_deadline()
                 collect_from(i, now)
+                for j in partners[i]:
+                    deadlines[j] = nodes[j][1].next_deadline()
+                    collect_from(j, now)
             else:
                 for i, d in enumerate(deadlines):
                     if d is not None and d <= now:
@@ -183,6 +189,9 @@ class SimNetwork:
                         node.poll(now)
                         deadlines[i] = node.next_deadline()
                         collect_from(i, now)
+                        for j in partners[i]:
+                            deadlines[j] = nodes[j][1].next_deadline()
+                            collect_from(j, now)
             if condition():
                 self.steps += steps
                 return True
