@@ -26,15 +26,16 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from ..endpoint import MavlinkEndpoint
+from ..vehicle_info import home_position_message
 from ..mission import messages as m
 from ..mission.actions import Send
 from ..mission.constants import Cmd, CommandResult, MissionResult, Severity
 from ..net.node import Address
 from ..wire.dialect import mavlink as _d
 from .bridge_server import MISSION, BridgeServer, Pending, waypoints_for
-from .commands import COMMANDS
+from .commands import COMMANDS, Waypoint
 from .frame import ERROR, MspFrame, Version
-from .jobs import Done, Failed, JobRunner, Result, nav_status, read_mission, write_mission
+from .jobs import Done, Failed, JobRunner, Result, nav_status, read_mission, read_waypoint, write_home, write_mission
 from .nodes import MspClientNode
 
 HEARTBEAT_PERIOD = 1.0
@@ -133,6 +134,11 @@ class MspBridge:
         elif name in ("COMMAND_LONG", "COMMAND_INT"):
             if msg.command == Cmd.DO_SET_MISSION_CURRENT:
                 self._set_current(int(msg.param1), frame, now, command=True)
+            elif msg.command == Cmd.GET_HOME_POSITION or (
+                    msg.command == Cmd.REQUEST_MESSAGE and int(msg.param1) == _d.MAVLINK_MSG_ID_HOME_POSITION):
+                self.link.runner.start(read_waypoint(0), now, lambda result, at: self._home(frame, result, at))
+            elif msg.command == Cmd.DO_SET_HOME and name == "COMMAND_INT" and int(msg.param1) == 0:
+                self._set_home(frame, now)
             else:
                 self.endpoint.send(m.command_ack_message(msg.command, CommandResult.UNSUPPORTED, frame.source),
                                    frame.source)
@@ -214,6 +220,32 @@ class MspBridge:
             self.endpoint.send(m.command_ack_message(Cmd.DO_SET_MISSION_CURRENT, result, frame.source), frame.source)
         if not ok:
             self.endpoint.send(m.statustext_message(Severity.WARNING, why[:50]))
+
+    # --- home: MSP waypoint 0 (seed 004: HOME_POSITION <-> MSP_WP, SET_HOME_POSITION <-> MSP_SET_WP) ----
+    def _home(self, frame: Any, result: Result, now: float) -> None:
+        """HOME_POSITION from MSP_WP 0, which INAV fills only once it has a home (GPS fix):
+        zeros mean none yet (TEMPORARILY_REJECTED)."""
+        wp = result.waypoints[0] if isinstance(result, Done) else None
+        known = wp is not None and (wp.lat or wp.lon)
+        if known:
+            self.endpoint.send(home_position_message(wp.lat / 1e7, wp.lon / 1e7, wp.alt / 100, now), frame.source)
+        result_code = CommandResult.ACCEPTED if known else CommandResult.TEMPORARILY_REJECTED
+        self.endpoint.send(m.command_ack_message(frame.msg.command, result_code, frame.source), frame.source)
+        self._release(now)
+
+    def _set_home(self, frame: Any, now: float) -> None:
+        """MAV_CMD_DO_SET_HOME (COMMAND_INT, a given location) as MSP_SET_WP 0, read back with
+        MSP_WP 0: INAV takes a home only while armed with a GPS fix (navigation.c:3958-3962)."""
+        msg = frame.msg
+        home = Waypoint(0, 1, msg.x, msg.y, round(msg.z * 100), 0, 0, 0, 0)
+
+        def written(result: Result, at: float) -> None:
+            back = result.waypoints[0] if isinstance(result, Done) and result.waypoints else None
+            ok = back is not None and (back.lat, back.lon, back.alt) == (home.lat, home.lon, home.alt)
+            code = CommandResult.ACCEPTED if ok else CommandResult.TEMPORARILY_REJECTED
+            self.endpoint.send(m.command_ack_message(msg.command, code, frame.source), frame.source)
+            self._release(at)
+        self.link.runner.start(write_home(home), now, written)
 
     def _on_status(self, result: Result, now: float) -> None:
         if isinstance(result, Done) and len(result.payload) >= 4 and result.payload[3] >= 1:

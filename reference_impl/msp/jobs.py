@@ -134,6 +134,15 @@ def write_mission(waypoints: tuple[Waypoint, ...]) -> Job:
     return Done(tuple(waypoints), info)
 
 
+def write_home(home: Waypoint) -> Job:
+    """MSP_SET_WP 0, then MSP_WP 0: what the flight controller holds as home after it."""
+    reply = yield request("MSP_SET_WP", home.pack())
+    bad = _answer(reply, "MSP_SET_WP 0")
+    if bad is not None:
+        return bad
+    return (yield from read_waypoint(0))
+
+
 def nav_status() -> Job:
     reply = yield request("MSP_NAV_STATUS")
     bad = _answer(reply, "MSP_NAV_STATUS")

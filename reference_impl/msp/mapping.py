@@ -123,6 +123,11 @@ ROWS: tuple[Row, ...] = (
         "MSP_SET_WP n stores waypoint n; the index is set by MSP2_INAV_SET_WP_INDEX, taken only while armed "
         "flying a WP mission (msp_protocol_v2_inav.h:132; navigation.c:3895-3907)", "INAV", "index = seq",
         "on the ground: refused (STATUSTEXT; the command: TEMPORARILY_REJECTED), MISSION_CURRENT unchanged"),
+    Row("home", "HOME_POSITION, MAV_CMD_DO_SET_HOME (lat, lon: degE7; alt: mm)", "MSP_WP / MSP_SET_WP of waypoint 0",
+        f"{SEED}: HOME_POSITION lat, lon, alt <-> MSP_WP lat, lon, altitude; SET_HOME_POSITION <-> MSP_SET_WP",
+        "MSP_WP 0 holds GPS_home once there is a home fix, else zeros (navigation.c:3832-3838); MSP_SET_WP 0 "
+        "sets home only while armed with a usable position (navigation.c:3958-3962)", "INAV",
+        "alt (cm) = altitude (mm) / 10", "no home yet, or a new one on the ground: TEMPORARILY_REJECTED"),
     Row("heartbeat", "HEARTBEAT type, mavlink_version", "(none)",
         f"{SEED}: type <- MSP_IDENT (100) MULTITYPE, mavlink version <- MSP_IDENT MSP VERSION",
         "INAV 9.1 has no MSP_IDENT (msp/msp_protocol.h defines none; a request is answered `!`)", "INAV",

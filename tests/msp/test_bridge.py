@@ -206,3 +206,33 @@ def test_a_noisy_stream_is_counted_and_the_mission_still_goes_through() -> None:
     assert rig.do("download", MISSION).items == tuple(_plan(3))
     stats = rig.link.parser.stats
     assert stats.garbage_bytes > 0 and stats.bad_checksum > 0
+
+
+class _HasHome(MspFlightController):
+    """A flight controller with a GPS home: MSP_WP 0 holds it."""
+
+    def _wp(self, payload: bytes) -> bytes:
+        if payload[:1] == b"\x00":
+            return Waypoint(0, 4, 473977420, 85455940, 48830, 0, 0, 0, 0xA5).pack()
+        return super()._wp(payload)
+
+
+def _command(rig: _Rig, msg) -> list:
+    before = len(rig.gcs.received)
+    rig.gcs.send(msg)
+    rig.net.run_for(3.0)
+    return rig.gcs.received[before:]
+
+
+def test_home_is_msp_waypoint_0() -> None:
+    from mavconform.reference_impl.mission import messages as m
+    from mavconform.reference_impl.wire.dialect import mavlink as d
+    get = m.command_long_message(Cmd.GET_HOME_POSITION, (1, 1))
+    got = _command(_Rig(_HasHome()), get)
+    home = [x for x in got if x._type == "HOME_POSITION"]
+    assert home and (home[0].latitude, home[0].longitude, home[0].altitude) == (473977420, 85455940, 488300)
+    assert [x.result for x in got if x._type == "COMMAND_ACK"] == [0]
+    rig = _Rig()                                                     # no home yet (no GPS fix): zeros
+    assert [x.result for x in _command(rig, get) if x._type == "COMMAND_ACK"] == [1]
+    set_home = d.MAVLink_command_int_message(1, 1, 0, Cmd.DO_SET_HOME, 0, 0, 0, 0, 0, 0, 473977420, 85455940, 488.3)
+    assert [x.result for x in _command(rig, set_home) if x._type == "COMMAND_ACK"] == [1]   # on the ground: refused
