@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     if not Path(adapter[0]).exists():
         print(f"gcs_through_bridge: {adapter[0]} is missing (`make run-msp-bridge-clients` installs MAVProxy there)", file=sys.stderr)
         return 2
-    out = args.out or Path(tempfile.mkdtemp(prefix="gcs-bridge-"))
+    out = (args.out or Path(tempfile.mkdtemp(prefix="gcs-bridge-"))).resolve()   # the adapters take absolute paths
     out.mkdir(parents=True, exist_ok=True)
     port = _free_udp_port()
     log = open(out / "bridge.out", "w")
