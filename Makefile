@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-msp run-msp-bridge run-msp-bridge-clients run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
+.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-msp run-msp-bridge run-msp-bridge-clients run-fidelity run-gcs run-gcs-clients demo fuzz fault-table vectors handover bench clean
 
 setup: $(VENV)/.installed
 
@@ -42,6 +42,9 @@ setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk whe
 
 run-msp: setup       ## the MSP clauses vs builtin:msp (INAV's waypoint store) over TCP loopback -> reports/msp/
 	$(BIN)/mavconform run --target builtin:msp --report-dir reports/msp -q
+
+run-fidelity: setup  ## the fidelity survey (frames × plan types) of builtin:spec, px4 and ardupilot: each as its profile predicts
+	for p in spec px4 ardupilot; do $(BIN)/mavconform fidelity --target builtin:$$p --report-dir reports/fidelity-$$p -q || exit 1; done
 
 # run-msp-bridge: the MAVLink suite through `mavconform bridge` to builtin:msp; expectations/msp-bridge.toml
 # lists what MSP cannot do (each entry names its row of docs/msp-mapping.md)

@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
                                "breaks": sorted(mu.breaks)} for mu in rows], indent=2))
             return 0
         for mu in rows:
-            broken = ", ".join(sorted(mu.breaks)) or "no clause (a bug for the fuzzers to find)"
+            broken = ", ".join(sorted(mu.breaks)) or "no clause (a bug for the fuzzers or the fidelity survey to find)"
             print(f"mutant:{mu.name:<28} {mu.description}\n{'':<36} breaks {broken}")
         return 0
     if args.json:

@@ -16,7 +16,7 @@ import sys
 from mavconform.reference_impl.errors import LocalProtocolError, UsageError
 
 from . import (__version__, clauses_cmd, demo_cmd, fault_table_cmd, fuzz_cmd, gcs_cmd, handover_cmd, profiles_cmd,
-               proxy_cmd, report_cmd, run_cmd, vectors_cmd, vehicle_cmd, bridge_cmd)
+               proxy_cmd, report_cmd, run_cmd, vectors_cmd, vehicle_cmd, bridge_cmd, fidelity_cmd)
 
 EXIT_USAGE = 2
 ERROR_PREFIX = "mavconform: error: "
@@ -50,6 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
     vectors_cmd.add_parser(sub)
     handover_cmd.add_parser(sub)
     bridge_cmd.add_parser(sub)
+    fidelity_cmd.add_parser(sub)
     return parser
 
 

@@ -1,0 +1,96 @@
+"""The fidelity survey (issue 26, frames × plan types): each builtin profile's matrix equals what
+its declared rules predict, cell for cell; three mutants are caught in exactly the cells they
+break; the classes follow the rules; `mavconform fidelity` writes run.json and fidelity.md."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from mavconform.cli import main
+from mavconform.conformance.fidelity.cells import FRAMES, frame_cells
+from mavconform.conformance.fidelity.classify import UPSTREAM_RESERVED, classify
+from mavconform.conformance.fidelity.predict import predict
+from mavconform.conformance.fidelity.run import survey
+from mavconform.conformance.harness.stored_form import StoredForm
+from mavconform.conformance.target_uri import parse_target
+from mavconform.reference_impl.mission.constants import Cmd
+from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.profiles import load_profile
+from mavconform.reports.run_document import check_run
+
+
+def _cells(target: str) -> dict[tuple, dict]:
+    doc = survey(parse_target(target), virtual=True).doc
+    return {(e["plan_type"], e["frame"], e["command"]): e for e in doc["fidelity"]["cells"]}
+
+
+@pytest.mark.parametrize("profile", ["spec", "px4", "px4-fixedwing", "ardupilot", "ardupilot-plane"])
+def test_a_builtin_profile_comes_out_as_its_rules_predict(profile: str) -> None:
+    cells = _cells(f"builtin:{profile}")
+    assert len(cells) == 5 * len(FRAMES)
+    unlike = {k: (e["class"], e["predicted"]) for k, e in cells.items() if not e["as_predicted"]}
+    assert not unlike
+    assert {e["class"].split(":")[0] for e in cells.values()} >= {"exact", "refused"}
+
+
+@pytest.mark.parametrize("mutant,broken", [
+    ("rounds-circle-radius", {("fence", f, 5003): "changed:param1 {r}->{w}" for f in (0, 3, 5, 6, 10, 11)}),
+    ("drops-relative-alt-int", {("mission", 6, 16): "changed:frame 6->5"}),
+    ("refuses-terrain-frames", {("mission", 10, 16): "refused:UNSUPPORTED_FRAME",
+                                ("mission", 11, 16): "refused:UNSUPPORTED_FRAME"}),
+])
+def test_a_mutant_is_caught_in_the_cells_it_breaks(mutant: str, broken: dict) -> None:
+    cells = _cells(f"mutant:{mutant}")
+    unlike = {k: e["class"] for k, e in cells.items() if not e["as_predicted"]}
+    assert set(unlike) == set(broken)
+    for key, want in broken.items():
+        radius = 150.25 + FRAMES.index(key[1])
+        assert unlike[key] == want.format(r=radius, w=float(round(radius)))
+        assert cells[key]["predicted"] == "exact"
+
+
+def _wp(frame: int, **changes) -> MissionItem:
+    return replace(MissionItem(0, frame, Cmd.NAV_WAYPOINT, 0.0, 0.0, 0.0, 0.0, 473977420, 85455940, 30.0, 0, 1),
+                   **changes)
+
+
+def test_the_classes_follow_the_rules() -> None:
+    spec = StoredForm()
+    assert classify([_wp(3)], [_wp(3, current=1)], spec) == "exact"
+    assert classify([_wp(3)], [_wp(6)], spec) == "int_twin"
+    assert classify([_wp(3)], [_wp(0)], spec) == "changed:frame 3->0"
+    assert classify([_wp(3)], [_wp(3, z=30.5)], spec) == "changed:z 30.0->30.5"
+    vertex = MissionItem(0, 3, 5001, 3.0, 0.0, 0.0, 0.0, 1, 2, 0.0, 0, 1, MissionType.FENCE)
+    assert classify([vertex], [replace(vertex, frame=5)], spec) == f"changed:frame 3->5 (rule: {UPSTREAM_RESERVED})"
+    compact = StoredForm(storage="compact15", basis="A13")
+    ret = MissionItem(0, 0, 5000, 0.0, 0.0, 0.0, 0.0, 1, 2, 20.0, 0, 1, MissionType.FENCE)   # no altitude kept
+    assert classify([ret], [replace(ret, z=0.0)], compact) == "changed:z 20.0->0.0 (rule: compact15 item storage (A13))"
+    assert classify([ret], [replace(ret, z=0.0)], spec) == "changed:z 20.0->0.0"
+
+
+def test_a_refusal_is_predicted_with_its_code() -> None:
+    px4 = load_profile("px4")
+    cell = next(c for c in frame_cells() if c.key == ("mission", 1, 16))
+    assert predict(cell, px4.behaviour, StoredForm()) == "refused:UNSUPPORTED_FRAME"
+
+
+@pytest.mark.udp
+def test_the_command_writes_the_matrix(tmp_path, capsys) -> None:
+    assert main(["fidelity", "--target", "builtin:spec", "-q", "--report-dir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "110 cells in" in out and "profile spec: 0 unlike its prediction" in out
+    doc = json.loads((tmp_path / "run.json").read_text())
+    check_run(doc)
+    fid = doc["fidelity"]
+    assert fid["format"] == "mavconform-fidelity/1" and fid["scope"] == "frames" and len(fid["cells"]) == 110
+    entry = next(e for e in fid["cells"] if (e["plan_type"], e["frame"], e["command"]) == ("fence", 3, 5001))
+    assert set(entry) == {"plan_type", "frame", "command", "sent", "back", "class", "predicted", "as_predicted", "exchange"}
+    assert fid["exchanges"][entry["exchange"]][0]["msg"] == "MISSION_COUNT" and len(fid["exchanges"]) == fid["uploads"]
+    assert len(entry["sent"]) == 3 and entry["class"] == "exact" and entry["back"] == entry["sent"]
+    assert doc["restore"]["status"] in ("restored", "unchanged")
+    assert "| 3 GLOBAL_RELATIVE_ALT | exact |" in (tmp_path / "fidelity.md").read_text()
+    assert main(["fidelity", "--target", "mutant:drops-relative-alt-int", "-q", "--report-dir", str(tmp_path)]) == 1
+    assert "⚠ profile: exact" in (tmp_path / "fidelity.md").read_text()
