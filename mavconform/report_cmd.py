@@ -1,5 +1,6 @@
 """`mavconform report render RUN.json`: re-render the reports of an earlier run.
 `mavconform report expectations RUN.json`: draft an expectations file from a run.
+`mavconform report diff A.json B.json`: what differs between two runs.
 
 render: with no output option, writes all of them (JSON, JUnit, Markdown, HTML) next to
 RUN.json's name in --dir (default: RUN.json's folder).
@@ -8,6 +9,8 @@ the failure it excuses (`observed`, the detail with its numbers as `*`), the run
 as `evidence`, and `seen_on`. Reason and variant are taken from --base where it lists the
 clause; any other entry says it is unconfirmed: read each against the autopilot's source
 before you keep it. A bad or foreign file gets one line naming it.
+diff: one line per clause whose outcome changed and per fidelity cell whose class changed (or
+that one run lacks), details and timings left out; exit 0 when nothing differs, 1 otherwise.
 """
 
 from __future__ import annotations
@@ -40,6 +43,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the target the run was made on, e.g. 'PX4 v1.16.0 SITL (SIH), 2026-11-23'")
     e.add_argument("--output", metavar="FILE", help="write it to FILE (default: standard output)")
     e.set_defaults(run=draft_expectations)
+    d = rsub.add_parser("diff", help="what differs between two run.json files (clauses, fidelity cells)",
+                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    d.add_argument("a", metavar="A.json")
+    d.add_argument("b", metavar="B.json")
+    d.set_defaults(run=diff)
+
+
+def diff(args: argparse.Namespace) -> int:
+    from mavconform.reports import load_run
+    from mavconform.reports.diff import differences
+    lines = differences(load_run(args.a), load_run(args.b))
+    for line in lines:
+        print(line)
+    print(f"{len(lines)} difference(s) between {args.a} and {args.b}")
+    return 1 if lines else 0
 
 
 def render(args: argparse.Namespace) -> int:

@@ -94,3 +94,17 @@ def test_the_command_writes_the_matrix(tmp_path, capsys) -> None:
     assert "| 3 GLOBAL_RELATIVE_ALT | exact |" in (tmp_path / "fidelity.md").read_text()
     assert main(["fidelity", "--target", "mutant:drops-relative-alt-int", "-q", "--report-dir", str(tmp_path)]) == 1
     assert "⚠ profile: exact" in (tmp_path / "fidelity.md").read_text()
+
+
+def test_report_diff_shows_exactly_the_cells_that_differ(tmp_path, capsys) -> None:
+    a, b = tmp_path / "a", tmp_path / "b"
+    main(["fidelity", "--target", "builtin:spec", "-q", "--report-dir", str(a)])
+    main(["fidelity", "--target", "mutant:refuses-terrain-frames", "-q", "--report-dir", str(b)])
+    capsys.readouterr()
+    assert main(["report", "diff", str(a / "run.json"), str(a / "run.json")]) == 0
+    capsys.readouterr()
+    assert main(["report", "diff", str(a / "run.json"), str(b / "run.json")]) == 1
+    out = capsys.readouterr().out.splitlines()
+    assert out[:2] == ["cell mission frame 10 command 16: exact -> refused:UNSUPPORTED_FRAME",
+                       "cell mission frame 11 command 16: exact -> refused:UNSUPPORTED_FRAME"]
+    assert out[-1].startswith("2 difference(s) between")
