@@ -3,10 +3,10 @@
 `exact`: every field as sent. `int_twin`: only the frame differs, and it came back as its INT
 encoding twin or the other way round (0<->5, 3<->6, 10<->11: upstream common.xml declares them
 the same frame), the one change upstream allows. Anything else is `changed:` with each field's
-from and to; a change a documented rule explains gets `(rule: ...)`: upstream's own (a param
-common.xml marks "Reserved" carries nothing, so neither does the altitude reference of a
-frame on an item without an altitude) or the target profile's storage form, named with its
-VARIANTS.md row. A refusal is `refused:<MISSION_ACK result name>`.
+from and to; a change a documented rule explains gets `(rule: ...)`: upstream's own (INT twins;
+a param common.xml marks "Reserved" carries nothing, so neither does the altitude reference of
+an item without an altitude; fence and rally items have no autocontinue) or the target
+profile's storage form, named with its VARIANTS.md row. A refusal is `refused:<MISSION_ACK result name>`.
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ from mavconform.reference_impl.mission.store import STORAGE_FORMS
 from ..harness.stored_form import StoredForm
 
 FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z", "autocontinue")
-UPSTREAM_RESERVED = "upstream: reserved params and the frame of an item without altitude carry nothing"
+UPSTREAM_RESERVED = ("upstream: INT-twin frames, Reserved params, no autocontinue on fence and rally items, "
+                     "no altitude reference without an altitude")
 
 
 def fields_of(item: MissionItem) -> dict[str, Any]:
