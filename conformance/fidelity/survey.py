@@ -75,9 +75,9 @@ def _upload_and_read(t: Tester, cells: list[Cell], lead: list[MissionItem],
         return "refused:" + procedures.result_name(ack.msg.type).removeprefix("MAV_MISSION_")
     got = procedures.download(t, plan_type)
     if got is not None and len(got.items) < len(items):
-        # fewer items than were accepted: read once more after a moment (ArduCopter once
-        # served an accepted fence circle as an empty fence), so a storage race is not
-        # taken for a loss; what the second read says is the cell's class
+        # fewer items than were accepted: read once more after a moment (ArduCopter, still
+        # booting, served an accepted fence circle as an empty fence until the survey waited
+        # for readiness), so a storage race is not taken for a loss; the second read decides
         t.wait_until(lambda: False, RE_READ_AFTER)
         got = procedures.download(t, plan_type) or got
     if got is None:
