@@ -139,6 +139,10 @@ JUDGES: dict[str, Judged] = {
     "mission_commands": unjudged(
         "refusing a command it does not store is the spec's own answer (UNSUPPORTED); the clauses "
         "upload NAV_WAYPOINTs in a global frame, which every list holds"),
+    "frame_lists_all_plans": Judged({}, "which frames a fence or rally item may use is the fidelity survey's "
+                                    "to judge (mavconform fidelity: the frame matrix's refusals); the clauses "
+                                    "upload fence and rally items in frames 0 and 3, which the global list holds",
+                                    needs=("mission_commands",)),
     "location_frames": unjudged(
         "taking a location in more frames than the spec vehicle does is the vehicle's choice; the "
         "clauses use global frames"),

@@ -84,12 +84,13 @@ class CommandList:
 MissionCommands = AbstractSet[int] | Sequence[CommandList] | None
 
 
-def command_rules(mission_commands: MissionCommands) -> tuple[ItemRule, ...]:
+def command_rules(mission_commands: MissionCommands, all_plans: bool = False) -> tuple[ItemRule, ...]:
     """MAV_MISSION_UNSUPPORTED for a command the plan type does not hold. `mission_commands`:
     the mission commands this vehicle stores, in any frame; or a table of `CommandList`s,
     where the first list whose frames hold the item's frame decides, and a mission item in a
     frame no list has gets UNSUPPORTED_FRAME first; None: any command in a mission (fence and
-    rally items must still carry their own)."""
+    rally items must still carry their own). `all_plans`: the table decides fence and rally
+    items too (their commands must then be in the frame's list), as PX4's one parser does."""
     if mission_commands is None:
         return (ItemRule("fence and rally commands known", MissionResult.UNSUPPORTED,
                          lambda it: it.mission_type is not MissionType.MISSION,
@@ -102,15 +103,19 @@ def command_rules(mission_commands: MissionCommands) -> tuple[ItemRule, ...]:
         return next((c for c in table if c.frames is None or frame in c.frames), None)
 
     def known(it: MissionItem) -> bool:
-        if it.mission_type is not MissionType.MISSION:
-            return it.command in COMMANDS_BY_TYPE[it.mission_type]
+        if it.mission_type is not MissionType.MISSION or all_plans:
+            # a table shared by every plan type still holds each type to its own commands
+            if it.command not in COMMANDS_BY_TYPE[it.mission_type]:
+                return False
+            if it.mission_type is not MissionType.MISSION and not all_plans:
+                return True
         chosen = selected(it.frame)
         return chosen is not None and it.command in chosen.commands
 
     command = ItemRule(COMMAND_RULE, MissionResult.UNSUPPORTED, lambda it: True, known)
     if all(c.frames is None for c in table):
         return (command,)
-    return (ItemRule(FRAME_LIST_RULE, MissionResult.UNSUPPORTED_FRAME, _in_mission,
+    return (ItemRule(FRAME_LIST_RULE, MissionResult.UNSUPPORTED_FRAME, (lambda it: True) if all_plans else _in_mission,
                      lambda it: selected(it.frame) is not None), command)
 
 
@@ -229,14 +234,16 @@ def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
               location_alt_max: float | None = None,
               lat_lon_range_check: bool = True,
               command_frames: Mapping[int, AbstractSet[int]] | None = None,
-              autocontinue_required: bool = False) -> tuple[ItemRule, ...]:
+              autocontinue_required: bool = False,
+              frame_lists_all_plans: bool = False) -> tuple[ItemRule, ...]:
     """The spec rules with another set (or frame table) of mission commands (None: any
     command, see `command_rules`), other frames for items with a location (`frame_rules`),
     params that may be NaN (`param_rules`), an altitude cap (`altitude_rules`), and without
     the latitude/longitude range check (`lat_lon_range_check=False`: PX4 takes them as sent),
-    with per-command frames and autocontinue required (`command_frame_rules`)."""
+    with per-command frames and autocontinue required (`command_frame_rules`), and the frame
+    table deciding fence and rally items too (`frame_lists_all_plans`, `command_rules`)."""
     lat_lon = _LAT_LON_RULES if lat_lon_range_check else ()
-    return (*param_rules(nan_params), *command_rules(mission_commands),
+    return (*param_rules(nan_params), *command_rules(mission_commands, frame_lists_all_plans),
             *command_frame_rules(command_frames, autocontinue_required), *frame_rules(location_frames),
             *_FIELD_RULES, *lat_lon, _ALTITUDE_FINITE, *altitude_rules(location_alt_max),
             *_COMMAND_VALUE_RULES)

@@ -253,6 +253,9 @@ _KNOBS = (
          "the mission commands stored (MAV_CMD names or numbers), or one list per set of frames "
          "([{frames, commands}]: other frames get UNSUPPORTED_FRAME); others get UNSUPPORTED "
          "(default: every mission command of the upstream common.xml, in any frame)"),
+    Knob("frame_lists_all_plans", RULES, "frame_lists_all_plans", _bool,
+         "with mission_commands as one list per set of frames: the lists decide fence and rally "
+         "items too (their commands must be in the frame's list; other frames: UNSUPPORTED_FRAME)"),
     Knob("location_frames", RULES, "location_frames", _frames,
          "frames a mission item whose command has a location may use (others: UNSUPPORTED_FRAME); "
          "the frame of an item without one is not checked (default: global frames or "

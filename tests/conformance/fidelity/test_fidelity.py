@@ -108,3 +108,16 @@ def test_report_diff_shows_exactly_the_cells_that_differ(tmp_path, capsys) -> No
     assert out[:2] == ["cell mission frame 10 command 16: exact -> refused:UNSUPPORTED_FRAME",
                        "cell mission frame 11 command 16: exact -> refused:UNSUPPORTED_FRAME"]
     assert out[-1].startswith("2 difference(s) between")
+
+
+def test_builtin_px4_refuses_fence_and_rally_where_px4s_parser_does() -> None:
+    """Learnt from PX4 v1.16 SIH (docs/real-targets.md): its one parser takes fence and rally items
+    only in the global frames (frame_lists_all_plans)."""
+    cells = _cells("builtin:px4")
+    for plan_type, command in (("fence", 5001), ("fence", 5003), ("fence", 5000), ("rally", 5100)):
+        assert cells[(plan_type, 2, command)]["class"] == "refused:UNSUPPORTED"
+        assert cells[(plan_type, 10, command)]["class"] == cells[(plan_type, 11, command)]["class"] == \
+            "refused:UNSUPPORTED_FRAME"
+        assert cells[(plan_type, 3, command)]["class"] == "exact"
+    spec = _cells("builtin:spec")
+    assert spec[("fence", 2, 5001)]["class"] == "refused:UNSUPPORTED_FRAME" and spec[("rally", 10, 5100)]["class"] == "exact"
