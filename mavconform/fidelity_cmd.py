@@ -11,6 +11,7 @@ from mavconform.conformance.fidelity.run import SCOPES, survey
 from mavconform.conformance.fidelity.table import markdown, short
 from mavconform.conformance.target_uri import FORMS, parse_target
 from mavconform.reference_impl.errors import UsageError
+from mavconform.reports.fidelity_html import fidelity_html
 
 DESCRIPTION = """\
 Upload each cell of the fidelity matrix, download it, and say what came back: every MAV_FRAME
@@ -24,8 +25,9 @@ names) says from its declared rules; a cell unlike its prediction is marked and 
 (exit 1): either the vehicle changes something no rule says, or the profile lacks a rule.
 Cells of one kind go up in one upload where the target takes them all, one by one where it
 refuses some. The target's plans are read first and put back after.
-Writes run.json (the matrix under `fidelity`, docs/fidelity.md says the format) and
-fidelity.md (the matrix as a Markdown table) to --report-dir.
+Writes run.json (the matrix under `fidelity`, docs/fidelity.md says the format),
+fidelity.md (the matrix as a Markdown table) and fidelity.html (the matrix in colour, each cell
+linked to its exchange) to --report-dir.
 """
 
 
@@ -40,7 +42,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--matrix-scope", choices=SCOPES, default="frames",
                    help="which matrix: frames (every MAV_FRAME × plan type; the command × param matrix comes next)")
     p.add_argument("--report-dir", default="reports/fidelity", metavar="DIR",
-                   help="where run.json and fidelity.md go (default %(default)s)")
+                   help="where run.json, fidelity.md and fidelity.html go (default %(default)s)")
     p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
     p.set_defaults(run=run)
 
@@ -64,6 +66,7 @@ def run(args: argparse.Namespace) -> int:
     (out / "run.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
     fid = doc["fidelity"]
     (out / "fidelity.md").write_text(markdown(fid), encoding="utf-8")
+    (out / "fidelity.html").write_text(fidelity_html(doc), encoding="utf-8")
     if result.unresponsive:
         print(f"mavconform fidelity: target unresponsive: {result.unresponsive}", file=sys.stderr)
         return 1
@@ -75,5 +78,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"\n{len(fid['cells'])} cells in {fid['uploads']} uploads: "
           + ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
           + f"; profile {fid['profile']}: {len(unlike)} unlike its prediction; restore: {doc['restore']['status']}")
-    print(f"reports in {out}/ (run.json, fidelity.md)")
+    print(f"reports in {out}/ (run.json, fidelity.md, fidelity.html)")
     return 1 if unlike else 0

@@ -92,8 +92,11 @@ def test_the_command_writes_the_matrix(tmp_path, capsys) -> None:
     assert len(entry["sent"]) == 3 and entry["class"] == "exact" and entry["back"] == entry["sent"]
     assert doc["restore"]["status"] in ("restored", "unchanged")
     assert "| 3 GLOBAL_RELATIVE_ALT | exact |" in (tmp_path / "fidelity.md").read_text()
+    page = (tmp_path / "fidelity.html").read_text()
+    assert page.count("<td class=\"exact\" title=\"exact\">") == 30 and 'id="xfence-3-5001"' in page and "MISSION_COUNT" in page
     assert main(["fidelity", "--target", "mutant:drops-relative-alt-int", "-q", "--report-dir", str(tmp_path)]) == 1
     assert "⚠ profile: exact" in (tmp_path / "fidelity.md").read_text()
+    assert '<td class="changed ruleless unlike" title="changed:frame 6-&gt;5">' in (tmp_path / "fidelity.html").read_text()
 
 
 def test_report_diff_shows_exactly_the_cells_that_differ(tmp_path, capsys) -> None:
