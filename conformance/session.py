@@ -27,7 +27,7 @@ from mavconform.reference_impl.net.udp import UdpDriver
 from mavconform.reference_impl.net.uri import local_bind_for
 from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
-from .harness.link_timing import link_facts
+from .harness.link_timing import link_facts, stream_events
 from .harness.tester import Tester, record_traffic
 from .harness.stored_form import form_for_target, form_of_behaviour
 from .harness.tester_node import TesterNode
@@ -288,13 +288,7 @@ class Session:
     def link_events(self) -> dict[str, Any] | None:
         """For the run's report (volatile): what happened to a stream link (connections,
         losses, bytes, frames dropped while it was down); None on UDP."""
-        if self.stream is None:
-            return None
-        facts = self.stream.describe()
-        facts.pop("uri"), facts.pop("kind"), facts.pop("bytes_per_second")
-        start = self.t.now()
-        facts["history"] = [{**h, "t": round(h["t"] - start, 3)} for h in facts["history"]]
-        return facts
+        return stream_events(self.stream, self.t.now())
 
     def testers(self) -> list[Tester]:
         return [self.t] + ([self._second] if self._second is not None else []) + list(self._more.values())

@@ -4,17 +4,15 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import replace
 from mavconform.reference_impl.msp.bridge import BridgeConfig, MspBridge, MspLink
 from mavconform.reference_impl.msp.jobs import Done, read_mission
-from mavconform.reference_impl.msp.links import connect
+from mavconform.reference_impl.msp.links import connect, parse_msp_link
 from mavconform.reference_impl.msp.nodes import MspServerNode
 from mavconform.reference_impl.net import MonotonicClock, UdpDriver
 from mavconform.reference_impl.net.links import attach
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reports.text import msp_stream_text
-from mavconform.reference_impl.net.uri import (LISTEN_FORMS, PEER_FORMS, LinkUri, SerialUri, UdpUri, parse_link_uri,
-                                               parse_udp_uri)
+from mavconform.reference_impl.net.uri import LISTEN_FORMS, PEER_FORMS, LinkUri, UdpUri, parse_link_uri, parse_udp_uri
 
 from .options import capture_to, mavlink_id, positive, sigterm_as_interrupt
 
@@ -71,10 +69,7 @@ def _msp_uri(text: str) -> LinkUri | None:
     baud unless given, INAV's MSP default)."""
     if text.strip().lower() in (BUILTIN, "builtin:msp"):
         return None
-    uri = parse_link_uri(text, role="peer", option="--msp")
-    if isinstance(uri, SerialUri) and text.rstrip().rpartition(":")[2] != str(uri.baud):
-        uri = replace(uri, baud=115200)
-    return uri
+    return parse_msp_link(text, role="peer", option="--msp")
 
 
 def run(args: argparse.Namespace) -> int:

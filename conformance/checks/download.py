@@ -53,17 +53,15 @@ def _detailed_or_plain(t: Tester, n: int, variant: int) -> tuple[list[MissionIte
     acceptance radius or yaw) gets the plain ones, and the clause's detail says so."""
     items = _detailed(n, variant)
     frame = procedures.upload(t, items, MISSION)
-    refused = frame is not None and frame.msg.type in PARAM_REFUSALS
-    if refused:
-        items = plans.mission(n, variant)
-        note = (f"the target refused waypoints with params 2 and 4 set ({procedures.result_name(frame.msg.type)}): "
-                "checked with params 0")
-        t.note(note)
-        procedures.ensure_plan(t, items, MISSION)
-        return items, note
-    if frame is None or frame.msg.type != MissionResult.ACCEPTED:
-        procedures.ensure_plan(t, items, MISSION)   # says why it is undecided
-    return items, ""
+    if frame is None or frame.msg.type not in PARAM_REFUSALS:
+        procedures.accepted(frame, len(items), MISSION)   # else the clause is undecided, saying why
+        return items, ""
+    items = plans.mission(n, variant)
+    note = (f"the target refused waypoints with params 2 and 4 set ({procedures.result_name(frame.msg.type)}): "
+            "checked with params 0")
+    t.note(note)
+    procedures.ensure_plan(t, items, MISSION)
+    return items, note
 
 
 def _check_count(t: Tester, items: list[MissionItem]) -> int:

@@ -26,6 +26,19 @@ def reply_allowance(bytes_per_second: float | None) -> float:
     return round((2 * MAX_FRAME + BACKLOG) / bytes_per_second, 3)
 
 
+def stream_events(stream: Any, start: float) -> dict[str, Any] | None:
+    """The run document's volatile `link`: what happened to a stream link during the run
+    (connections, losses, bytes, frames dropped while it was down), times from `start`;
+    None for UDP or an in-process link."""
+    if stream is None:
+        return None
+    facts = stream.describe()
+    for key in ("uri", "kind", "bytes_per_second"):   # run.link holds those
+        facts.pop(key)
+    facts["history"] = [{**h, "t": round(h["t"] - start, 3)} for h in facts["history"]]
+    return facts
+
+
 def link_facts(kind: str, stream: Any) -> dict[str, Any]:
     """The run document's `run.link`: what the link is and the timing the suite used.
     `stream`: the target's StreamLink, or None (UDP, or an in-process target)."""

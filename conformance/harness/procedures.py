@@ -121,12 +121,16 @@ def serve_upload(t: Tester, items: list[MissionItem], mission_type: MissionType 
 def ensure_plan(t: Tester, items: list[MissionItem], mission_type: MissionType) -> Frame:
     """Put `items` on the target as its `mission_type` plan (the accepting MISSION_ACK is
     returned), or make the clause undecided."""
-    frame = upload(t, items, mission_type)
+    return accepted(upload(t, items, mission_type), len(items), mission_type)
+
+
+def accepted(frame: Frame | None, count: int, mission_type: MissionType) -> Frame:
+    """A setup upload's final MISSION_ACK if it accepted the plan, else the clause is undecided."""
     if frame is None:
-        raise PreconditionFailed(f"setup: uploading a {len(items)}-item {mission_type.label} plan "
+        raise PreconditionFailed(f"setup: uploading a {count}-item {mission_type.label} plan "
                                  "got no MISSION_ACK")
     if frame.msg.type != MissionResult.ACCEPTED:
-        raise PreconditionFailed(f"setup: uploading a {len(items)}-item {mission_type.label} plan "
+        raise PreconditionFailed(f"setup: uploading a {count}-item {mission_type.label} plan "
                                  f"was answered {result_name(frame.msg.type)}")
     return frame
 

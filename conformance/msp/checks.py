@@ -11,12 +11,11 @@ from __future__ import annotations
 
 from typing import Callable
 
-from mavconform.reference_impl.msp.commands import FLAG_LAST, Waypoint
+from mavconform.reference_impl.msp.commands import FLAG_LAST, Waypoint, waypoint_difference
 from mavconform.reference_impl.msp.frame import ERROR, MspFrame, Version, encode
 
 from ..outcome import ClauseFailed, NotApplicable
 from .plans import mission, waypoint
-from .plans import difference as _difference
 from .session import MspSession
 from .tester import STORAGE_TIMEOUT, MspTester
 
@@ -44,14 +43,14 @@ def same(t: MspTester, expected: list[Waypoint], what: str) -> None:
     """Each of `expected` reads back as it is, else the clause fails naming the field."""
     for wp in expected:
         back = t.wp(wp.number)
-        diff = _difference(wp, back)
+        diff = waypoint_difference(wp, back)
         if diff is not None:
             raise ClauseFailed(f"{what}: waypoint {wp.number}: {diff}")
 
 
 def absent(t: MspTester, wp: Waypoint, why: str) -> None:
     """`wp` must not read back as written."""
-    if _difference(wp, t.wp(wp.number)) is None:
+    if t.wp(wp.number) == wp:
         raise ClauseFailed(f"waypoint {wp.number} was stored: {why}")
 
 
@@ -83,7 +82,7 @@ def info_counts(s: MspSession) -> str:
     info = t.info()
     if info.count not in (2, 5):
         raise ClauseFailed(f"after a waypoint 5 written to a 2-waypoint list: MSP_WP_GETINFO says count {info.count}")
-    stored = _difference(waypoint(5, 2, last=True), t.wp(5)) is None
+    stored = t.wp(5) == waypoint(5, 2, last=True)
     if info.count != (5 if stored else 2):
         raise ClauseFailed(f"waypoint 5 {'was' if stored else 'was not'} stored, yet MSP_WP_GETINFO says count {info.count}")
     return "MSP_WP_GETINFO's count: " + "; ".join(seen) + f"; {info.count} after a waypoint it did not take"
@@ -180,7 +179,7 @@ def no_stale_waypoints(s: MspSession) -> str:
     write_ok(t, new)
     for wp in old[2:]:
         back = t.wp(wp.number)
-        if _difference(wp, back) is None:
+        if back == wp:
             raise ClauseFailed(f"MSP_WP {wp.number} read back the older mission's waypoint {wp.number} "
                                "after a 2-waypoint mission replaced it")
     same(t, new, "the new mission")

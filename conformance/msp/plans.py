@@ -40,11 +40,3 @@ def mission(count: int, variant: int = 0) -> list[Waypoint]:
         out[2] = Waypoint(3, JUMP, 0, 0, 0, 1, 2 + variant, 0, 0)    # jump to waypoint 1, twice
     return out
 
-
-def difference(sent: Waypoint, back: Waypoint) -> str | None:
-    """The first field that differs, as "p2: sent 300, read back 0"; None if equal."""
-    for name in ("number", "action", "lat", "lon", "alt", "p1", "p2", "p3", "flag"):
-        a, b = getattr(sent, name), getattr(back, name)
-        if a != b:
-            return f"{name}: sent {a}, read back {b}"
-    return None

@@ -23,7 +23,6 @@ from ..harness.exchange import Exchange
 from ..outcome import ClauseResult, Outcome, TargetUnresponsive
 from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check, skip_undecided
 from .checks import MSP_CHECKS
-from .plans import difference
 from .session import MspSession
 
 
@@ -130,7 +129,7 @@ def _restore(session: MspSession, snapshot: list[Waypoint] | None, *, restore: b
     t = session.tester
     try:
         now = t.stored()
-        if len(now) == len(snapshot) and all(difference(a, b) is None for a, b in zip(snapshot, now)):
+        if now == snapshot:
             return {"status": "unchanged", "detail": "the flight controller holds the mission it held before the run"}
         if not snapshot:
             return {"status": "skipped", "detail": f"the flight controller held no mission and now holds {len(now)} "
@@ -140,7 +139,7 @@ def _restore(session: MspSession, snapshot: list[Waypoint] | None, *, restore: b
         back = t.stored()
     except TargetUnresponsive as exc:
         return {"status": "failed", "detail": f"the flight controller stopped answering while the mission was put back: {exc}"}
-    if len(back) == len(snapshot) and all(difference(a, b) is None for a, b in zip(snapshot, back)):
+    if back == snapshot:
         return {"status": "restored", "detail": f"put back the {len(snapshot)}-waypoint mission it held before the run"}
     return {"status": "failed", "detail": f"wrote back the {len(snapshot)}-waypoint mission it held, and read back "
             f"{len(back)} waypoints that differ"}

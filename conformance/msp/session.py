@@ -17,7 +17,7 @@ from mavconform.reference_impl.net.links import stream_of
 from mavconform.reference_impl.net.sim import CaptureHook, SimNetwork
 from mavconform.reference_impl.net.udp import UdpDriver
 
-from ..harness.link_timing import link_facts
+from ..harness.link_timing import link_facts, stream_events
 from .target import MspTarget
 from .tester import MspTester
 
@@ -74,14 +74,7 @@ class MspSession:
         stats = self.node.parser.stats
         msp = {"frames": stats.frames, "garbage_bytes": stats.garbage_bytes, "bad_checksum": stats.bad_checksum,
                "bad_header": stats.bad_header, "oversize": stats.oversize, "truncated": stats.truncated}
-        if self.stream is None:
-            return {"msp": msp}
-        facts = self.stream.describe()
-        for key in ("uri", "kind", "bytes_per_second"):
-            facts.pop(key)
-        start = self.started
-        facts["history"] = [{**h, "t": round(h["t"] - start, 3)} for h in facts["history"]]
-        return {**facts, "msp": msp}
+        return {**(stream_events(self.stream, self.started) or {}), "msp": msp}
 
     def close(self) -> None:
         close = getattr(self.driver, "close", None)

@@ -15,15 +15,15 @@ A mistake is one `UsageError` line quoting the text.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from mavconform.reference_impl.errors import UsageError
-from mavconform.reference_impl.net.uri import LinkUri, SerialUri, parse_link_uri
+from mavconform.reference_impl.msp.links import parse_msp_link
+from mavconform.reference_impl.net.uri import LinkUri, SerialUri
 
 BUILTIN = "builtin:msp"
 MUTANT_PREFIX = "msp-mutant:"
 LINK_PREFIX = "msp:"
-MSP_BAUD = 115200                # INAV's serial ports speak MSP at 115200 by default
 FORMS = (f"{BUILTIN}, {MUTANT_PREFIX}NAME, msp:tcp:HOST:PORT, msp:tcpin:[HOST:]PORT, msp:udp:HOST:PORT "
          "or msp:serial:DEVICE[:BAUD]")
 
@@ -72,17 +72,10 @@ def parse_msp_target(text: str) -> MspTarget:
     if rest.lower().startswith("pty"):
         raise UsageError(f"bad target {text!r}: pty is where we serve; a flight controller on a "
                          "pseudo-terminal is msp:serial:/dev/pts/N")
-    link = parse_link_uri(rest, option="--target")
+    link = parse_msp_link(rest, option="--target")
     if isinstance(link, SerialUri):
-        if not _baud_given(rest):
-            link = replace(link, baud=MSP_BAUD)
         if not os.path.exists(link.device):
             raise UsageError(f"cannot open serial port {link.device}: No such file or directory")
     elif link.mode == "udpin":
         raise UsageError(f"bad target {text!r}: MSP is asked, never sent first: give msp:udp:HOST:PORT")
     return MspTarget("link", link=link)
-
-
-def _baud_given(rest: str) -> bool:
-    tail = rest.rpartition(":")[2]
-    return rest.count(":") >= 2 and tail.isdigit()

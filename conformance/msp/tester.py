@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any, Callable
 
 from mavconform.reference_impl.msp.capture import frame_fields, frame_name
-from mavconform.reference_impl.msp.commands import COMMANDS, Waypoint, WaypointInfo
+from mavconform.reference_impl.msp.commands import CODE, Waypoint, WaypointInfo
 from mavconform.reference_impl.msp.frame import ERROR, MspFrame, Version
 from mavconform.reference_impl.msp.nodes import MspClientNode
 
@@ -23,7 +23,6 @@ from ..outcome import ClauseFailed, TargetUnresponsive
 
 REPLY_TIMEOUT = 1.0      # s: INAV answers at once; a 57600-baud line moves a waypoint in 5 ms
 STORAGE_TIMEOUT = 3.0    # s: MSP_WP_MISSION_SAVE writes flash before it answers
-CODE = {name: c.code for name, c in COMMANDS.items()}
 
 
 class MspTester:

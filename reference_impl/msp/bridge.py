@@ -26,14 +26,14 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from ..endpoint import MavlinkEndpoint
-from ..vehicle_info import home_position_message
 from ..mission import messages as m
 from ..mission.actions import Send
 from ..mission.constants import Cmd, CommandResult, MissionResult, Severity
 from ..net.node import Address
+from ..vehicle_info import home_position_message
 from ..wire.dialect import mavlink as _d
 from .bridge_server import MISSION, BridgeServer, Pending, waypoints_for
-from .commands import COMMANDS, Waypoint
+from .commands import CODE, Waypoint
 from .frame import ERROR, MspFrame, Version
 from .jobs import Done, Failed, JobRunner, Result, nav_status, read_mission, read_waypoint, write_home, write_mission
 from .nodes import MspClientNode
@@ -41,7 +41,7 @@ from .nodes import MspClientNode
 HEARTBEAT_PERIOD = 1.0
 STATUS_PERIOD = 1.0          # s between MSP_NAV_STATUS reads while idle
 MAX_HELD = 64                # GCS frames kept while a job runs; beyond, dropped and counted
-SET_WP_INDEX = COMMANDS["MSP2_INAV_SET_WP_INDEX"].code
+SET_WP_INDEX = CODE["MSP2_INAV_SET_WP_INDEX"]
 SET_CURRENT_REFUSED = "set current refused by the flight controller"
 
 
@@ -61,12 +61,8 @@ class MspLink(MspClientNode):
         self.runner = JobRunner(self.send) if timeout is None else JobRunner(self.send, timeout=timeout)
         self.coupled: list[Any] = []
 
-    def datagram_received(self, data: bytes, source: Address, now: float) -> None:
-        if self.peer is None:
-            self.peer = source
-        self.last_heard = now
-        for frame in self.parser.feed(data):
-            self.runner.reply(frame, now)
+    def took(self, frame: MspFrame, now: float) -> None:
+        self.runner.reply(frame, now)
 
     def poll(self, now: float) -> None:
         self.runner.poll(now)

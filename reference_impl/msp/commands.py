@@ -89,6 +89,17 @@ class Waypoint:
 
 
 FLAG_LAST = 0xA5               # navigation.h:537
+CODE = {name: c.code for name, c in COMMANDS.items()}   # command name -> number
+WAYPOINT_FIELDS = ("number", "action", "lat", "lon", "alt", "p1", "p2", "p3", "flag")
+
+
+def waypoint_difference(sent: Waypoint, back: Waypoint, *, verb: str = "sent") -> str | None:
+    """The first field a read-back lost, as "p2: sent 300, read back 0"; None if equal."""
+    for name in WAYPOINT_FIELDS:
+        a, b = getattr(sent, name), getattr(back, name)
+        if a != b:
+            return f"{name}: {verb} {a}, read back {b}"
+    return None
 
 
 @dataclass(frozen=True)

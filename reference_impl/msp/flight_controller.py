@@ -26,12 +26,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .commands import COMMANDS, FLAG_LAST, Waypoint, WaypointInfo
+from .commands import CODE, FLAG_LAST, Waypoint, WaypointInfo
 from .frame import ERROR, FROM_FC, MspFrame
 
 ACTIONS = frozenset({1, 3, 4, 5, 6, 7, 8})   # navigation.h:520-526 (setWaypoint's list, navigation.c:3985)
 API = (0, 2, 5)                              # MSP_API_VERSION as INAV 9.1.0 answered
-CODES = {name: c.code for name, c in COMMANDS.items()}
 
 
 def missing(number: int) -> Waypoint:
@@ -55,14 +54,14 @@ class MspFlightController:
         self.nav_status = bytes(7)            # mode, state, action, number, error, i16 heading target
         self.stats = ControllerStats()
         self._handlers = {
-            CODES["MSP_API_VERSION"]: lambda p: bytes(API),
-            CODES["MSP_WP_GETINFO"]: lambda p: self.info().pack(),
-            CODES["MSP_WP"]: self._wp,
-            CODES["MSP_SET_WP"]: self._set_wp,
-            CODES["MSP_NAV_STATUS"]: lambda p: self.nav_status,
-            CODES["MSP_WP_MISSION_SAVE"]: self._save,
-            CODES["MSP_WP_MISSION_LOAD"]: self._load,
-            CODES["MSP2_INAV_SET_WP_INDEX"]: lambda p: None,   # never armed in a WP mission here
+            CODE["MSP_API_VERSION"]: lambda p: bytes(API),
+            CODE["MSP_WP_GETINFO"]: lambda p: self.info().pack(),
+            CODE["MSP_WP"]: self._wp,
+            CODE["MSP_SET_WP"]: self._set_wp,
+            CODE["MSP_NAV_STATUS"]: lambda p: self.nav_status,
+            CODE["MSP_WP_MISSION_SAVE"]: self._save,
+            CODE["MSP_WP_MISSION_LOAD"]: self._load,
+            CODE["MSP2_INAV_SET_WP_INDEX"]: lambda p: None,   # never armed in a WP mission here
         }
 
     def info(self) -> WaypointInfo:

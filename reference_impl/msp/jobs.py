@@ -19,13 +19,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Generator
 
-from .commands import COMMANDS, FLAG_LAST, Waypoint, WaypointInfo
+from .commands import CODE, FLAG_LAST, Waypoint, WaypointInfo, waypoint_difference
 from .frame import ERROR, MspFrame
 
-CODE = {name: c.code for name, c in COMMANDS.items()}
 REPLY_TIMEOUT = 0.5      # s for one reply (INAV answers at once; 115200 baud moves 30 bytes in 3 ms)
 RETRIES = 2              # resends of a request that got nothing
-FIELDS = ("number", "action", "lat", "lon", "alt", "p1", "p2", "p3", "flag")
 # The MultiWii NAV convention for "no mission": one RTH waypoint of zeros flagged 0xA5
 # (mwptools' MSP navigation notes); it is also what MSP_WP returns for a missing waypoint.
 EMPTY = Waypoint(1, 4, 0, 0, 0, 0, 0, 0, FLAG_LAST)
@@ -50,14 +48,6 @@ Job = Generator[MspFrame, "MspFrame | None", Result]
 
 def request(name: str, payload: bytes = b"") -> MspFrame:
     return MspFrame(CODE[name], payload)
-
-
-def difference(sent: Waypoint, back: Waypoint) -> str | None:
-    for name in FIELDS:
-        a, b = getattr(sent, name), getattr(back, name)
-        if a != b:
-            return f"{name}: written {a}, read back {b}"
-    return None
 
 
 def _answer(reply: MspFrame | None, what: str) -> Failed | None:
@@ -120,7 +110,7 @@ def write_mission(waypoints: tuple[Waypoint, ...]) -> Job:
         one = yield from read_waypoint(wp.number)
         if isinstance(one, Failed):
             return one
-        diff = difference(wp, one.waypoints[0])
+        diff = waypoint_difference(wp, one.waypoints[0], verb="written")
         if diff is not None:
             return Failed(f"waypoint {wp.number} did not store as written: {diff}")
     got = yield from read_info()

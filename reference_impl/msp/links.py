@@ -9,17 +9,29 @@ were read (`PassThrough`): MSP nodes frame the stream themselves.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 from ..net.links import attach, stream_of
 from ..net.node import Address
 from ..net.stream_framer import PassThrough
 from ..net.tcp_link import TcpClientLink, TcpServerLink
-from ..net.uri import LinkUri
+from ..net.uri import LinkUri, Role, SerialUri, parse_link_uri
 from .nodes import MspClientNode, MspServerNode
 
 CONNECT_TIMEOUT = 3.0     # s for a TCP link to come up before the first request
 LOOPBACK = "127.0.0.1"
+MSP_BAUD = 115200         # INAV's serial ports speak MSP at 115200 by default (MAVLink's: 57600)
+
+
+def parse_msp_link(text: str, *, role: Role = "target", option: str | None = None) -> LinkUri:
+    """An address of an MSP flight controller: the one link parser's, except that a serial
+    line given without a baud rate runs at MSP_BAUD."""
+    uri = parse_link_uri(text, role=role, option=option)
+    given = text.strip().partition(":")[2] != getattr(uri, "device", None)
+    if isinstance(uri, SerialUri) and not given:
+        uri = replace(uri, baud=MSP_BAUD)
+    return uri
 
 
 def connect(driver: Any, node: MspClientNode, uri: LinkUri | None, *,

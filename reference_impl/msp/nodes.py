@@ -15,7 +15,7 @@ from typing import Callable
 from ..net.node import Address
 from .flight_controller import MspFlightController
 from .frame import ERROR, FROM_FC, TO_FC, MspFrame, encode
-from .parser import MspParser, ParserStats
+from .parser import MspParser
 
 MAX_PEERS = 64   # parsers kept for distinct UDP sources; a stream link has one peer
 
@@ -56,17 +56,6 @@ class MspServerNode(_MspNode):
             for reply in self.controller.handle(frame):
                 self._out.append((encode(reply), source))
 
-    @property
-    def stats(self) -> ParserStats:
-        """What its parsers read, over every peer."""
-        total = ParserStats()
-        for parser in self._parsers.values():
-            s = parser.stats
-            for name in ("frames", "garbage_bytes", "bad_checksum", "oversize", "bad_header", "truncated"):
-                setattr(total, name, getattr(total, name) + getattr(s, name))
-            total.last_error = s.last_error or total.last_error
-        return total
-
 
 class MspClientNode(_MspNode):
     """Our end of an MSP link: frames out to one peer, replies (`>` and `!`) in, timed."""
@@ -94,4 +83,8 @@ class MspClientNode(_MspNode):
             self.peer = source
         self.last_heard = now
         for frame in self.parser.feed(data):
-            self.inbox.append((now, frame))
+            self.took(frame, now)
+
+    def took(self, frame: MspFrame, now: float) -> None:
+        """A whole frame from the peer: kept in `inbox` (a subclass may act on it instead)."""
+        self.inbox.append((now, frame))
