@@ -43,8 +43,8 @@ setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk whe
 run-msp: setup       ## the MSP clauses vs builtin:msp (INAV's waypoint store) over TCP loopback -> reports/msp/
 	$(BIN)/mavconform run --target builtin:msp --report-dir reports/msp -q
 
-run-fidelity: setup  ## the fidelity survey (frames × plan types) of builtin:spec, px4 and ardupilot: each as its profile predicts
-	for p in spec px4 ardupilot; do $(BIN)/mavconform fidelity --target builtin:$$p --report-dir reports/fidelity-$$p -q || exit 1; done
+run-fidelity: setup  ## the fidelity survey (frames × plan types, commands × params) of builtin:spec, px4 and ardupilot: each as its profile predicts
+	for p in spec px4 ardupilot; do $(BIN)/mavconform fidelity --target builtin:$$p --matrix-scope all --report-dir reports/fidelity-$$p -q || exit 1; done
 
 # run-msp-bridge: the MAVLink suite through `mavconform bridge` to builtin:msp; expectations/msp-bridge.toml
 # lists what MSP cannot do (each entry names its row of docs/msp-mapping.md)

@@ -151,6 +151,10 @@ JUDGES: dict[str, Judged] = {
         "sends one"),
     "location_alt_max": unjudged(
         "refusing an altitude is refusing an item, the vehicle's right; the clauses fly at 10-30 m"),
+    "value_rules": unjudged(
+        "which param values a vehicle refuses is its own (the spec asks a value it cannot store to be "
+        "refused, not which); the fidelity survey's command matrix shows each (mavconform fidelity "
+        "--matrix-scope commands)", example="px4"),
     "lat_lon_range_check": unjudged(
         "the spec does not ask for a position range check; MIS.UP.17 then offers the next item "
         "it may refuse (an unknown command)"),

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from mavconform.conformance.fidelity.cells import entry_key
 
-def _cells(doc: dict[str, Any]) -> dict[tuple[str, int, int], str]:
+
+def _cells(doc: dict[str, Any]) -> dict[tuple[str, int, int, str], str]:
     fid = doc.get("fidelity") or {}
-    return {(c["plan_type"], c["frame"], c["command"]): c["class"] for c in fid.get("cells", [])}
+    return {entry_key(c): c["class"] for c in fid.get("cells", [])}
 
 
 def differences(a: dict[str, Any], b: dict[str, Any]) -> list[str]:
@@ -27,7 +29,8 @@ def differences(a: dict[str, Any], b: dict[str, Any]) -> list[str]:
     ca, cb = _cells(a), _cells(b)
     for key in sorted(ca.keys() | cb.keys()):
         if ca.get(key) != cb.get(key):
-            plan_type, frame, command = key
-            out.append(f"cell {plan_type} frame {frame} command {command}: {ca.get(key, 'not surveyed')} -> "
+            plan_type, frame, command, probe = key
+            out.append(f"cell {plan_type} frame {frame} command {command}{' ' + probe if probe else ''}: "
+                       f"{ca.get(key, 'not surveyed')} -> "
                        f"{cb.get(key, 'not surveyed')}")
     return out

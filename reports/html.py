@@ -21,6 +21,7 @@ from urllib.parse import quote
 
 from mavconform.reports import run_document as rd
 from mavconform.reports.deciding import deciding_event, recorded_event
+from mavconform.reports.fidelity_html import fidelity_sections
 from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
 from mavconform.reports.text import (clean, dropped_text, flight_endings, identity_text, interruption, link_text,
@@ -95,25 +96,28 @@ def html_report(doc: dict[str, Any], *, folder: str | Path | None = None) -> str
     verdict = summary["verdict"]
     target = one_line(doc["run"]["target"])
     headline = verdict_headline(verdict)
+    fidelity = doc.get("fidelity")
     out = ["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
            '<meta name="viewport" content="width=device-width, initial-scale=1">',
            f"<title>{escape(headline)}: mavconform against {escape(target)}</title>",
            f"<style>{CSS}</style>", "</head>", "<body>",
            f"<h1>mavconform against <code>{escape(target)}</code></h1>",
-           f'<p class="verdict {escape(verdict)}">{headline} '
-           f'<small>({summary["gating_failures"]} gating failure'
-           f'{"" if summary["gating_failures"] == 1 else "s"})</small></p>']
+           f'<p class="verdict {escape(verdict)}">{headline} <small>({_why_verdict(doc)})</small></p>']
     alarm = safety_alarm(doc)
     if alarm is not None:
         out.append(f'<p class="safety">⚠️ {escape(alarm)}</p>')
     stopped = interruption(doc)
     if stopped is not None:
         out.append(f'<p class="interrupted">{escape(stopped)}</p>')
-    out.append(_tally(clauses))
-    out += _what_failed(doc, stopped is not None)
-    out += _gating(doc)
-    out += ["<h2>Run</h2>", *_facts(doc, folder), *_counts(clauses)]
-    out += _matrix(clauses)
+    if fidelity is None:
+        out.append(_tally(clauses))
+        out += _what_failed(doc, stopped is not None)
+        out += _gating(doc)
+    out += ["<h2>Run</h2>", *_facts(doc, folder)]
+    if fidelity is None:
+        out += [*_counts(clauses), *_matrix(clauses)]
+    else:
+        out += fidelity_sections(doc)
     passing = [c for c in clauses if c["outcome"] == PASS]
     if passing:
         out.append(f"<h2>Passing clauses ({len(passing)})</h2>")
@@ -126,6 +130,14 @@ def html_report(doc: dict[str, Any], *, folder: str | Path | None = None) -> str
             out.append("</details>")
     out += ["</body>", "</html>", ""]
     return "\n".join(out)
+
+
+def _why_verdict(doc: dict[str, Any]) -> str:
+    if "fidelity" in doc:
+        unlike = sum(1 for e in doc["fidelity"]["cells"] if e.get("as_predicted") is False)
+        return f"{unlike} fidelity cell{'' if unlike == 1 else 's'} unlike the profile's prediction"
+    n = doc["summary"]["gating_failures"]
+    return f"{n} gating failure{'' if n == 1 else 's'}"
 
 
 def not_passing(clauses: list[dict[str, Any]]) -> list[dict[str, Any]]:

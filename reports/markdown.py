@@ -12,6 +12,7 @@ import re
 from typing import Any
 from urllib.parse import quote
 
+from mavconform.conformance.fidelity.table import markdown as survey_markdown
 from mavconform.reports.run_document import (OUTCOMES, PASS, clause_detail, outcome_counts,
                                              run_facts)
 from mavconform.reports.text import (document_identity, dropped_text, flight_endings, interruption, link_text,
@@ -66,6 +67,8 @@ def markdown_summary(doc: dict[str, Any]) -> str:
     if doc["capture"] is not None:
         out += ["", f"Capture: [{md(doc['capture'])}]({quote(one_line(doc['capture']))}) "
                    "(MCAP, opens in Foxglove)."]
+    if "fidelity" in doc:      # a fidelity survey: its matrices instead of clauses
+        return "\n".join(out + ["", survey_markdown(doc["fidelity"])]).rstrip("\n") + "\n"
     out += ["", "| Outcome | Clauses |", "|---|--:|"]
     for outcome, count in outcome_counts(clauses).items():
         out.append(f"| {OUTCOME_ICONS[outcome]} {outcome} | {count} |")

@@ -30,10 +30,16 @@ class Cell:
     frame: int
     command: int
     items: tuple[MissionItem, ...]        # what the cell uploads (seq from 0; renumbered in a batch)
+    probe: str = ""                       # the command matrix's probe (probes.py); "" in the frame matrix
 
     @property
-    def key(self) -> tuple[str, int, int]:
-        return (self.plan_type.label, self.frame, self.command)
+    def key(self) -> tuple[str, int, int, str]:
+        return (self.plan_type.label, self.frame, self.command, self.probe)
+
+
+def entry_key(entry: dict) -> tuple[str, int, int, str]:
+    """A run.json cell's key, as `Cell.key`."""
+    return (entry["plan_type"], entry["frame"], entry["command"], entry.get("probe") or "")
 
 
 def _near(i: int, k: int) -> tuple[int, int]:

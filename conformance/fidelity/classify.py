@@ -6,17 +6,21 @@ the same frame), the one change upstream allows. Anything else is `changed:` wit
 from and to; a change a documented rule explains gets `(rule: ...)`: upstream's own (INT twins;
 a param common.xml marks "Reserved" carries nothing, so neither does the altitude reference of
 an item without an altitude; fence and rally items have no autocontinue) or the target
-profile's storage form, named with its VARIANTS.md row. A refusal is `refused:<MISSION_ACK result name>`.
+profile's storage form, named by its id (run.json's `basis` says where the profile has it).
+A refusal is `refused:<MISSION_ACK result name>`.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from typing import Any, Sequence
 
 from mavconform.reference_impl.mission.items import PLAIN_FRAME, MissionItem
 from mavconform.reference_impl.mission.store import STORAGE_FORMS
 
 from ..harness.stored_form import StoredForm
+from .command_facts import COMMANDS
 
 FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z", "autocontinue")
 UPSTREAM_RESERVED = ("upstream: INT-twin frames, Reserved params, no autocontinue on fence and rally items, "
@@ -61,15 +65,41 @@ def classify(sent: Sequence[MissionItem], back: Sequence[MissionItem], form: Sto
     return "changed:" + ", ".join(shown) + (f" (rule: {rule})" if rule else "")
 
 
+def precision(sent: Sequence[MissionItem], back: Sequence[MissionItem]) -> dict[str, float]:
+    """For each float field that came back as another finite number: how far it moved (the
+    precision the round trip kept: 1234.5677 stored in whole centimetres moves 0.0077)."""
+    out: dict[str, float] = {}
+    for s, b in zip(sent, back):
+        for f in ("param1", "param2", "param3", "param4", "z"):
+            a, c = getattr(s, f), getattr(b, f)
+            if a != c and math.isfinite(a) and math.isfinite(c):
+                out[f] = max(out.get(f, 0.0), abs(a - c))
+    return out
+
+
+def _without_reserved(item: MissionItem) -> MissionItem:
+    """`item` with the params upstream marks reserved for its command set to 0 (command_facts)."""
+    fact = COMMANDS.get(int(item.command))
+    if fact is None:
+        return item
+    blank: dict[str, Any] = {}
+    for index, p in enumerate(fact.params, start=1):
+        if p.reserved:
+            blank[("param1", "param2", "param3", "param4", "x", "y", "z")[index - 1]] = 0 if index in (5, 6) else 0.0
+    return replace(item, **blank)
+
+
 def explained_by(sent: Sequence[MissionItem], back: Sequence[MissionItem], form: StoredForm) -> str | None:
     """Which documented rule turns what was sent into what came back, if one does."""
     upstream = StoredForm(basis="upstream")
-    if all(upstream.canonical(b, stored=True) == upstream.canonical(s) for s, b in zip(sent, back)):
+
+    def seen(item: MissionItem, stored: bool) -> dict[str, Any]:      # NaN equal to NaN
+        return fields_of(_without_reserved(upstream.canonical(item, stored=stored)))
+    if all(seen(b, True) == seen(s, False) for s, b in zip(sent, back)):
         return UPSTREAM_RESERVED
     if form.storage != "exact":
         keep = STORAGE_FORMS[form.storage]
-        if all(upstream.canonical(b, stored=True) == upstream.canonical(keep(s), stored=True)
-               for s, b in zip(sent, back)):
-            return f"{form.storage} item storage ({form.basis})"
+        if all(seen(b, True) == seen(keep(s), True) for s, b in zip(sent, back)):
+            return f"{form.storage} item storage"
     return None
 

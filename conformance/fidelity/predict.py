@@ -20,9 +20,21 @@ from mavconform.reference_impl.mission.validation import first_defect
 
 from ..harness.stored_form import StoredForm
 from .cells import Cell, numbered
-from .classify import classify
+from .classify import UPSTREAM_RESERVED, classify
 
 REFUSED = "refused:"
+
+
+def kept_as_upstream_allows(cls: str) -> bool:
+    """exact, an INT twin, or a change upstream's own rules explain (a reserved param dropped,
+    a fence item's autocontinue): the item kept, whatever the profile's storage form."""
+    return cls in ("exact", "int_twin") or (cls.startswith("changed:") and cls.endswith(f"(rule: {UPSTREAM_RESERVED})"))
+
+
+def agrees(cls: str, predicted: str) -> bool:
+    """Whether a cell came out as predicted: the same class, or both kept as upstream allows
+    (a profile need not say which of those its vehicle does)."""
+    return cls == predicted or (kept_as_upstream_allows(cls) and kept_as_upstream_allows(predicted))
 
 
 def predictable(behaviour: Any) -> bool:

@@ -8,12 +8,14 @@ rules predict (`predicted`, predict.py), for a profile whose rules say everythin
 cell (not INAV's). The run document is the conformance run's (no clauses) with the matrix
 under `fidelity`:
 
-    fidelity  {format: "mavconform-fidelity/1", scope: "frames", profile: NAME, basis: TEXT,
-               uploads: N, cells: [{plan_type: mission|fence|rally, frame: int, command: int,
+    fidelity  {format: "mavconform-fidelity/1", scope: "frames" | "commands" | "all", profile: NAME,
+               basis: TEXT, uploads: N, cells: [{plan_type: mission|fence|rally, frame: int,
+                 command: int, probe: "nominal" | "p<i>:<kind>" (command matrix only),
                  sent: [{frame, command, param1..param4, x, y, z, autocontinue}, ...],
                  back: [...] or null (not accepted), class: refused:<MAV_MISSION result> |
                  exact | int_twin | changed:<field from->to, ...>[ (rule: ...)] | unanswered |
-                 unread, predicted: the same vocabulary or null, as_predicted: bool or null,
+                 unread, precision: {field: |sent - back|} where a float came back as another
+                 number, predicted: the same vocabulary or null, as_predicted: bool or null,
                  exchange: index into `exchanges`}],
                exchanges: [[event, ...], ...]: each upload's and download's messages (the
                  report's sequence-diagram events), one list per upload; a batch's cells share one}
@@ -35,12 +37,21 @@ from ..outcome import TargetUnresponsive
 from ..runner import RunOutcome, _restore, _snapshot
 from ..session import Session
 from ..target_uri import TargetUri
-from .cells import Cell, frame_cells
-from .predict import predict, predictable
+from .cells import Cell, entry_key, frame_cells
+from .predict import agrees, predict, predictable
+from .probes import command_cells
 from .survey import run_survey
 
 FORMAT = "mavconform-fidelity/1"
-SCOPES = ("frames",)
+SCOPES = ("frames", "commands", "all")
+
+
+def scope_cells(scope: str) -> list[Cell]:
+    """frames: every MAV_FRAME × plan-type item kind; commands: every mission command × its
+    params' probes (probes.py); all: both."""
+    if scope not in SCOPES:
+        raise ValueError(f"unknown matrix scope {scope!r} (one of {', '.join(SCOPES)})")
+    return (frame_cells() if scope in ("frames", "all") else []) + (command_cells() if scope != "frames" else [])
 
 
 @dataclass
@@ -65,7 +76,7 @@ def survey(uri: TargetUri, *, scope: str = "frames", virtual: bool = False, seed
            on_cell: Callable[[dict[str, Any]], None] | None = None) -> FidelityRun:
     started = dt.datetime.now(dt.timezone.utc)
     begun = time.monotonic()
-    cells: list[Cell] = frame_cells()
+    cells = scope_cells(scope)
     options = document.RunOptions(target=str(uri), clauses="", seed=seed, profile=uri.profile)
     with Session(uri, virtual=virtual, seed=seed) as session:
         try:
@@ -84,10 +95,10 @@ def survey(uri: TargetUri, *, scope: str = "frames", virtual: bool = False, seed
         by_key = {c.key: c for c in cells}
         can_predict = predictable(profile.behaviour)
         for entry in result.cells:
-            cell = by_key[(entry["plan_type"], entry["frame"], entry["command"])]
+            cell = by_key[entry_key(entry)]
             guess = predict(cell, profile.behaviour, form) if can_predict else None
             entry["predicted"] = guess
-            entry["as_predicted"] = None if guess is None else guess == entry["class"]
+            entry["as_predicted"] = None if guess is None else agrees(entry["class"], guess)
         restore = _restore(session, snapshot) if snapshot is not None else {
             "status": "failed", "detail": "could not read the target's plans before the survey"}
         run = RunOutcome([], identity, restore, time.monotonic() - begun, 0.0, link=session.link_facts)

@@ -1,9 +1,11 @@
 """Run the fidelity survey against a target: upload each cell, download it, classify it.
 
-Bounded by batching (issue 26): the cells of one plan type and item kind go up in one upload
-where the target takes them all; a batch the target refuses is split into one upload per
-cell, since a refusal ends an upload and would hide the other cells' fate. A fence's return
-point goes alone (a fence holds one). Where the target keeps its home in mission slot 0
+Bounded by batching (issue 26): the cells of one plan type and item kind (frame matrix), or
+of one command (command matrix), go up in one upload where the target takes them all. A
+refusal ends an upload at the item it answers: that cell is refused, and the rest go up again
+without it; a refusal that answers no item (the count) splits the batch into one upload per
+cell. A command's nominal item goes first and alone: a command the target does not take has
+no param cells. A fence's return point goes alone (a fence holds one). Where the target keeps its home in mission slot 0
 (ArduPilot, A1), a placeholder waypoint goes first and is not judged. Each upload and
 download is the suite's own bounded procedure (harness/procedures.py): a target that does
 not answer leaves its cells `unanswered`, never a hang.
@@ -22,7 +24,7 @@ from ..harness import procedures
 from ..harness.exchange import Exchange
 from ..harness.tester import Tester
 from .cells import FENCE_RETURN, HOME_X, HOME_Y, Cell, numbered
-from .classify import classify, fields_of
+from .classify import classify, fields_of, precision
 
 OnCell = Callable[[dict[str, Any]], None]
 RE_READ_AFTER = 1.0     # s before a download that came back short is read again
@@ -36,9 +38,16 @@ class Survey:
 
 
 def _entry(cell: Cell, cls: str, back: list[MissionItem] | None) -> dict[str, Any]:
-    return {"plan_type": cell.plan_type.label, "frame": cell.frame, "command": cell.command,
-            "sent": [fields_of(it) for it in cell.items],
-            "back": [fields_of(it) for it in back] if back is not None else None, "class": cls}
+    entry = {"plan_type": cell.plan_type.label, "frame": cell.frame, "command": cell.command}
+    if cell.probe:
+        entry["probe"] = cell.probe
+    entry.update({"sent": [fields_of(it) for it in cell.items],
+                  "back": [fields_of(it) for it in back] if back is not None else None, "class": cls})
+    if back is not None:
+        kept = precision(cell.items, back)
+        if kept:
+            entry["precision"] = kept
+    return entry
 
 
 def _placeholder(t: Tester, plan_type: MissionType) -> list[MissionItem]:
@@ -47,24 +56,46 @@ def _placeholder(t: Tester, plan_type: MissionType) -> list[MissionItem]:
     return [MissionItem(0, 0, Cmd.NAV_WAYPOINT, 0.0, 0.0, 0.0, 0.0, HOME_X, HOME_Y, 10.0, 0, 1)]
 
 
-def _try(t: Tester, survey: Survey, cells: list[Cell]) -> list[dict[str, Any]] | str:
-    """Upload `cells` as one plan: their entries, or why not ("refused:NAME", "unanswered")."""
+def _try(t: Tester, survey: Survey, cells: list[Cell]) -> tuple[list[dict[str, Any]] | str, int | None]:
+    """Upload `cells` as one plan: their entries, or why not ("refused:NAME", "unanswered") and
+    which of them the refusal answered (None: not one item, or none of the cells')."""
     plan_type = cells[0].plan_type
     lead = _placeholder(t, plan_type)
     items = numbered(lead + [it for c in cells for it in c.items])
     survey.uploads += 1
     exchange = t.exchange = Exchange(t.now())
+    refused_at = None
     try:
         result = _upload_and_read(t, cells, lead, items)
+        if isinstance(result, str) and result.startswith("refused:"):
+            refused_at = _refused_cell(t, cells, len(lead))
     finally:
         t.exchange = None
         survey.exchanges.append(exchange.finish(t.now()))
     if isinstance(result, list):
         for entry in result:
             entry["exchange"] = len(survey.exchanges) - 1
-    return result
+    return result, refused_at
 
 
+def _refused_cell(t: Tester, cells: list[Cell], lead: int) -> int | None:
+    """The cell whose item the refusing MISSION_ACK answered: the last item the vehicle asked
+    for before it (a vehicle checks each item as it arrives and ends the upload at the first
+    it will not store). None where it refused before asking for any of the cells' items."""
+    seq = None
+    for frame in t.since_mark():
+        if frame.msg._type in ("MISSION_REQUEST", "MISSION_REQUEST_INT"):
+            seq = frame.msg.seq
+        elif frame.msg._type == "MISSION_ACK":
+            break
+    if seq is None or seq < lead:
+        return None
+    at = seq - lead
+    for n, cell in enumerate(cells):
+        if at < len(cell.items):
+            return n
+        at -= len(cell.items)
+    return None
 def _upload_and_read(t: Tester, cells: list[Cell], lead: list[MissionItem],
                      items: list[MissionItem]) -> list[dict[str, Any]] | str:
     plan_type = cells[0].plan_type
@@ -95,19 +126,45 @@ def _upload_and_read(t: Tester, cells: list[Cell], lead: list[MissionItem],
     return out
 
 
+def _settle(t: Tester, survey: Survey, members: list[Cell]) -> list[dict[str, Any]]:
+    """Every member's entry, in as few uploads as the target allows: the batch; where it is
+    refused at one cell, that cell is refused (the refusal is its own) and the rest go up
+    again; where the refusal names no cell, or nothing answers, one upload per cell."""
+    decided: dict[int, dict[str, Any]] = {}
+    remaining = list(range(len(members)))
+    for _ in range(len(members)):                   # bounded: each round decides a cell or all
+        if len(remaining) < 2 or members[remaining[0]].command == FENCE_RETURN:
+            break
+        result, at = _try(t, survey, [members[i] for i in remaining])
+        if isinstance(result, list):
+            decided.update(zip(remaining, result))
+            remaining = []
+            break
+        if at is None:
+            break
+        n = remaining.pop(at)
+        decided[n] = {**_entry(members[n], result, None), "exchange": len(survey.exchanges) - 1}
+    for n in remaining:
+        one, _ = _try(t, survey, [members[n]])
+        decided[n] = one[0] if isinstance(one, list) else {**_entry(members[n], one, None),
+                                                           "exchange": len(survey.exchanges) - 1}
+    return [decided[n] for n in range(len(members))]
+
+
 def run_survey(t: Tester, cells: list[Cell], on_cell: OnCell | None = None) -> Survey:
+    """Frame cells grouped by plan type and item kind; command cells by command, their nominal
+    item first and alone: a command the target refuses as such has no param cells surveyed."""
     survey = Survey()
-    groups: dict[tuple[MissionType, int], list[Cell]] = defaultdict(list)
+    groups: dict[tuple[MissionType, int, bool], list[Cell]] = defaultdict(list)
     for cell in cells:
-        groups[(cell.plan_type, cell.command)].append(cell)
-    for (plan_type, command), members in groups.items():
-        batch = _try(t, survey, members) if command != FENCE_RETURN and len(members) > 1 else None
-        if not isinstance(batch, list):
-            batch = []
-            for cell in members:
-                one = _try(t, survey, [cell])
-                batch += one if isinstance(one, list) else [{**_entry(cell, one, None),
-                                                             "exchange": len(survey.exchanges) - 1}]
+        groups[(cell.plan_type, cell.command, bool(cell.probe))].append(cell)
+    for (_, _, probing), members in groups.items():
+        if probing and members[0].probe == "nominal":
+            batch = _settle(t, survey, members[:1])
+            if batch[0]["class"].split(":")[0] in ("exact", "int_twin", "changed"):
+                batch += _settle(t, survey, members[1:])
+        else:
+            batch = _settle(t, survey, members)
         for entry in batch:
             survey.cells.append(entry)
             if on_cell is not None:

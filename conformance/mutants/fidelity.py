@@ -13,6 +13,7 @@ from mavconform.reference_impl.mission.server import MissionServer
 from . import mutant, server_mutant
 
 FENCE_CIRCLE = 5003
+DO_CHANGE_SPEED = 178
 TERRAIN_FRAMES = (10, 11)
 
 
@@ -24,6 +25,17 @@ class _RoundsCircleRadius(MissionServer):
         keep = self._keep
         self._keep = lambda it: keep(replace(it, param1=float(round(it.param1))) if int(it.command) == FENCE_CIRCLE
                                      else it)
+
+
+class _RoundsChangeSpeed(MissionServer):
+    """Keeps DO_CHANGE_SPEED's speed (param2) in whole metres per second, as a compact record
+    might, without refusing a speed it cannot keep."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        keep = self._keep
+        self._keep = lambda it: keep(replace(it, param2=float(round(it.param2)))
+                                     if int(it.command) == DO_CHANGE_SPEED and it.param2 == it.param2 else it)
 
 
 class _DropsRelativeAltInt(MissionServer):
@@ -48,6 +60,8 @@ class _RefusesTerrainFrames(MissionServer):
 
 
 mutant("rounds-circle-radius", "keeps a fence circle's radius in whole metres", set(), server_mutant(_RoundsCircleRadius))
+mutant("rounds-change-speed", "keeps DO_CHANGE_SPEED's speed (param2) in whole m/s", set(),
+       server_mutant(_RoundsChangeSpeed))
 mutant("drops-relative-alt-int", "stores a mission item in frame 6 (relative altitude, INT) as frame 5 (AMSL)",
        set(), server_mutant(_DropsRelativeAltInt))
 mutant("refuses-terrain-frames", "refuses mission items in frames 10 and 11, which its profile accepts",

@@ -136,7 +136,9 @@ class ServerBehaviour:
     # "compact15-plane": ArduPlane's build of it (a waypoint keeps acceptance radius and pass-by
     # distance as whole metres up to 255 instead of its hold time), or "float32-cm": a record
     # filled in float32 (lat/lon through x * 1e7f, altitude whole cm, params dropped, RTL in
-    # MAV_FRAME_MISSION; INAV 9.1).
+    # MAV_FRAME_MISSION; INAV 9.1), or "px4": PX4 v1.16's mission_item_s (px4_storage.py), or
+    # "ardupilot" / "ardupilot-plane": AP_Mission's per-command packing of the 15-byte record
+    # (ardupilot_commands.py) with fence items rebuilt, ArduPlane's waypoint its own way.
     item_storage: str = "exact"
     # A downloaded mission item carries current=1 exactly when it is the current item
     # (False: the flag is 0 on every item, whatever is current).

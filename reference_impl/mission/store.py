@@ -16,8 +16,11 @@ import zlib
 from dataclasses import replace
 from typing import Callable, Iterable, Sequence
 
+from .ardupilot_commands import round_trip as ardupilot_round_trip
+from .ardupilot_commands import u16
 from .constants import Cmd
 from .items import FRAME_MISSION, PLAIN_FRAME, PLAN_TYPES, MissionItem, MissionType, to_float32
+from .px4_storage import px4_mission_item
 
 _ITEM = struct.Struct("<HBHffffiifBBB")
 
@@ -116,6 +119,36 @@ def _compact15_plane(item: MissionItem) -> MissionItem:
                    param4=0.0)
 
 
+def _ardupilot(item: MissionItem) -> MissionItem:
+    """ArduCopter's and ArduRover's record read back (VARIANTS.md A13): a mission item through
+    AP_Mission's per-command packing (ardupilot_commands.py: uint8/uint16 params, flags, whole
+    centimetres, a plain frame; a command without a location comes back in frame 0 with x, y, z
+    0), rally items as `_compact15`, fence items rebuilt from their position and radius or
+    vertex count (GCS_MAVLink/MissionItemProtocol_Fence.cpp L15-78: frame GLOBAL, no altitude,
+    autocontinue 0). An item ArduCopter would refuse (a profile may take more) is kept as
+    `_compact15` keeps it."""
+    if item.mission_type is MissionType.FENCE:
+        return replace(_compact15(item), frame=0, autocontinue=0)
+    if item.mission_type is not MissionType.MISSION:
+        return _compact15(item)
+    try:
+        return replace(ardupilot_round_trip(item), seq=item.seq, current=item.current)
+    except ValueError:
+        return _compact15(item)
+
+
+def _ardupilot_plane(item: MissionItem) -> MissionItem:
+    """ArduPlane's build of the same (VARIANTS.md A31): a waypoint's 16-bit p1 holds its
+    acceptance radius (param2) in the low byte and its pass-by distance (param3) in the high
+    byte, each `MIN(0xFF, (uint16_t)param)` (-1 comes back 255), and no hold time, which is not
+    checked (AP_Mission.cpp L1091-1100 / L1630-1634, the APM_BUILD_ArduPlane branches)."""
+    if item.mission_type is not MissionType.MISSION or int(item.command) != Cmd.NAV_WAYPOINT:
+        return _ardupilot(item)
+    kept = _ardupilot(replace(item, param1=0.0))
+    return replace(kept, param1=0.0, param2=float(min(0xFF, u16(item.param2))),
+                   param3=float(min(0xFF, u16(item.param3))), param4=0.0)
+
+
 def _c_int32(value: float) -> int:
     """C's float-to-int32 cast on x86: truncated toward zero; NaN or out of range: INT32_MIN."""
     if not math.isfinite(value) or not -2**31 <= math.trunc(value) < 2**31:
@@ -145,4 +178,7 @@ STORAGE_FORMS: dict[str, Callable[[MissionItem], MissionItem]] = {
     "compact15": _compact15,
     "compact15-plane": _compact15_plane,
     "float32-cm": _float32_cm,
+    "px4": px4_mission_item,
+    "ardupilot": _ardupilot,
+    "ardupilot-plane": _ardupilot_plane,
 }

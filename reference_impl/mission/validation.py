@@ -235,19 +235,50 @@ def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
               lat_lon_range_check: bool = True,
               command_frames: Mapping[int, AbstractSet[int]] | None = None,
               autocontinue_required: bool = False,
-              frame_lists_all_plans: bool = False) -> tuple[ItemRule, ...]:
+              frame_lists_all_plans: bool = False,
+              value_rules: str = "spec") -> tuple[ItemRule, ...]:
     """The spec rules with another set (or frame table) of mission commands (None: any
     command, see `command_rules`), other frames for items with a location (`frame_rules`),
     params that may be NaN (`param_rules`), an altitude cap (`altitude_rules`), and without
     the latitude/longitude range check (`lat_lon_range_check=False`: PX4 takes them as sent),
     with per-command frames and autocontinue required (`command_frame_rules`), and the frame
-    table deciding fence and rally items too (`frame_lists_all_plans`, `command_rules`)."""
+    table deciding fence and rally items too (`frame_lists_all_plans`, `command_rules`), and
+    another autopilot's checks of param values (`value_rules`, a VALUE_RULES key)."""
     lat_lon = _LAT_LON_RULES if lat_lon_range_check else ()
+    finite, values = VALUE_RULES[value_rules]
     return (*param_rules(nan_params), *command_rules(mission_commands, frame_lists_all_plans),
             *command_frame_rules(command_frames, autocontinue_required), *frame_rules(location_frames),
-            *_FIELD_RULES, *lat_lon, _ALTITUDE_FINITE, *altitude_rules(location_alt_max),
-            *_COMMAND_VALUE_RULES)
+            *_FIELD_RULES, *lat_lon, *finite, *altitude_rules(location_alt_max), *values)
 
+
+def _c_int(v: float) -> int:
+    return math.trunc(v) if math.isfinite(v) else -2**31      # C's (int) of a float on x86-64
+
+
+_FENCE_VALUE_RULES = _COMMAND_VALUE_RULES[1:3]
+# PX4 v1.16.0 parse_mavlink_mission_item (P28): no check of a hold time, a jump or an altitude;
+# a region of interest's mode must be one its frame knows (L1480-1491: global frames
+# MAV_ROI_LOCATION or NONE; L1574-1581: MAV_FRAME_MISSION NONE, WPNEXT or WPINDEX)
+_PX4_ROI = ItemRule("region-of-interest mode known for the frame", MissionResult.INVALID_PARAM1,
+                    lambda it: _in_mission(it) and it.command in (Cmd.NAV_ROI, Cmd.DO_SET_ROI),
+                    lambda it: _c_int(it.param1) in ((0, 1, 2) if it.frame == FRAME_MISSION else (0, 3)))
+# ArduCopter (531699d6): a waypoint's hold time is a uint16 (AP_Mission.cpp L1104-1106:
+# INVALID_PARAM1 outside 0..65535); DO_JUMP's target is a uint16 and must name an item after
+# home (MissionItemProtocol_Waypoints.cpp L40-44: target 0 gets MAV_MISSION_ERROR; a target past
+# the upload's end too, which one item cannot show); its repeat count is not checked
+_AP_HOLD = ItemRule("waypoint hold time within 0..65535 s", MissionResult.INVALID_PARAM1,
+                    lambda it: it.command == Cmd.NAV_WAYPOINT and _in_mission(it),
+                    lambda it: math.isnan(it.param1) or 0 <= it.param1 <= 65535)
+_AP_JUMP = ItemRule("jump target after home", MissionResult.ERROR,
+                    lambda it: it.command == Cmd.DO_JUMP and _in_mission(it),
+                    lambda it: _c_int(it.param1) & 0xFFFF != 0)
+# value_rules -> (the altitude rule, the per-command value rules)
+VALUE_RULES: dict[str, tuple[tuple[ItemRule, ...], tuple[ItemRule, ...]]] = {
+    "spec": ((_ALTITUDE_FINITE,), _COMMAND_VALUE_RULES),
+    "px4": ((), (*_FENCE_VALUE_RULES, _PX4_ROI)),
+    "ardupilot": ((_ALTITUDE_FINITE,), (_AP_HOLD, *_FENCE_VALUE_RULES, _AP_JUMP)),
+    "ardupilot-plane": ((_ALTITUDE_FINITE,), (*_FENCE_VALUE_RULES, _AP_JUMP)),    # no hold time kept
+}
 
 SPEC_RULES: tuple[ItemRule, ...] = rules_for(MISSION_COMMANDS)
 

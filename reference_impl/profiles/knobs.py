@@ -19,7 +19,7 @@ from ..mission.commands import by_name
 from ..mission.constants import MISSION_COMMANDS, MissionResult
 from ..mission.items import PLAN_TYPES, MissionType
 from ..mission.store import STORAGE_FORMS
-from ..mission.validation import CommandList
+from ..mission.validation import VALUE_RULES, CommandList
 from ..wire.dialect import mavlink as _d
 from . import flight_knobs as fk
 
@@ -84,6 +84,12 @@ def _capacity(v: Any) -> dict[MissionType, int]:
         raise ValueError(f"expected a table with keys {sorted(_TYPE_BY_NAME)}, got {v!r}")
     parse = _count(0, 0xFFFF)
     return {_TYPE_BY_NAME[k]: parse(n) for k, n in v.items()}
+
+
+def _value_rules(v: Any) -> str:
+    if v not in VALUE_RULES:
+        raise ValueError(f"expected one of {sorted(VALUE_RULES)}, got {v!r}")
+    return v
 
 
 def _storage(v: Any) -> str:
@@ -272,6 +278,12 @@ _KNOBS = (
          "UNSUPPORTED_FRAME, checked right after the command)"),
     Knob("autocontinue_required", RULES, "autocontinue_required", _bool,
          "a mission item with autocontinue 0 gets UNSUPPORTED, checked with the command"),
+    Knob("value_rules", RULES, "value_rules", _value_rules,
+         "which checks of param values refuse an item: spec (a finite altitude for a destination, a "
+         "hold time >= 0, a whole jump target >= 0 and a repeat count >= -1, a fence polygon's vertex "
+         "count and a circle's radius), px4 (the fence checks and a region of interest's mode only) or "
+         "ardupilot (the spec's but a hold time within 0..65535 s, a jump target other than 0, MAV_MISSION_"
+         "ERROR, and no check of a repeat count), or ardupilot-plane (those but no hold time check)"),
     Knob("lat_lon_range_check", RULES, "lat_lon_range_check", _bool,
          "a mission item in a global frame needs a latitude within +-90 and a longitude within "
          "+-180 degrees (else INVALID_PARAM5_X / INVALID_PARAM6_Y); false: taken as sent"),
@@ -332,8 +344,12 @@ _KNOBS = (
          "a downloaded mission item has current=1 exactly when it is the current item (false: never)"),
     Knob("home_at_seq0", BEHAVIOUR, "home_at_seq0", _bool, "mission item 0 is the vehicle's home"),
     Knob("item_storage", BEHAVIOUR, "item_storage", _storage,
-         "how items are kept: exact, compact15 (ArduPilot's 15-byte record) or compact15-plane "
-         "(ArduPlane's: a waypoint keeps its radius and pass-by distance, not its hold time)"),
+         "how items are kept: exact, compact15 (ArduPilot's 15-byte record), compact15-plane "
+         "(ArduPlane's: a waypoint keeps its radius and pass-by distance, not its hold time), "
+         "float32-cm (INAV's waypoint record), px4 (PX4's mission_item_s: params it has no field "
+         "for come back 0, flags 0 or 1, a yaw wrapped to [0, 360)), ardupilot (ArduCopter's "
+         "and ArduRover's per-command packing of the 15-byte record, fence items rebuilt) or "
+         "ardupilot-plane (ArduPlane's: a waypoint keeps its radius and pass-by distance)"),
     Knob("opaque_id_fields", BEHAVIOUR, "opaque_id_fields", _bool, "plan ids are reported (false: the older dialect)"),
     Knob("clear_all_supported", BEHAVIOUR, "clear_all_supported", _bool, "MISSION_CLEAR_ALL with MAV_MISSION_TYPE_ALL works"),
     Knob("clear_while_flying", BEHAVIOUR, "clear_while_flying", _bool, "the mission may be cleared while flown"),

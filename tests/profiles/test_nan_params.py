@@ -155,12 +155,19 @@ def test_ardupilot_caps_the_altitude_of_a_location(command: str) -> None:
     assert setting.variant == "A24" and "LOCATION_ALT_MAX_M" in setting.source
 
 
-@pytest.mark.parametrize("profile", ["spec", "px4"])
-def test_spec_and_px4_need_a_finite_destination_altitude_only(profile: str) -> None:
-    rules = _rules(profile)
+def test_spec_needs_a_finite_destination_altitude_only() -> None:
+    rules = _rules("spec")
     assert _code(_item("NAV_WAYPOINT", z=1e9), rules) is None
     assert _code(_item("NAV_WAYPOINT", z=NAN), rules) == MissionResult.INVALID_PARAM7
     assert _code(_item("DO_SET_ROI_LOCATION", z=NAN), rules) is None   # an ROI is no destination
+
+
+def test_px4_checks_no_altitude() -> None:
+    """P28: PX4 v1.16's parser copies z as sent (mavlink_mission.cpp L1419); its SIH stored a
+    NAV_VTOL_LAND with a NaN altitude (the fidelity survey's cell 85 p7:nan)."""
+    rules = _rules("px4")
+    assert _code(_item("NAV_WAYPOINT", z=1e9), rules) is None
+    assert _code(_item("NAV_WAYPOINT", z=NAN), rules) is None
 
 
 # --- profile files --------------------------------------------------------------------------

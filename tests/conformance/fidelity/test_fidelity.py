@@ -1,6 +1,6 @@
 """The fidelity survey (issue 26, frames × plan types): each builtin profile's matrix equals what
 its declared rules predict, cell for cell; three mutants are caught in exactly the cells they
-break; the classes follow the rules; `mavconform fidelity` writes run.json and fidelity.md."""
+break; the classes follow the rules; `mavconform fidelity` writes run.json, run.md and run.html."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from dataclasses import replace
 import pytest
 
 from mavconform.cli import main
-from mavconform.conformance.fidelity.cells import FRAMES, frame_cells
+from mavconform.conformance.fidelity.cells import FRAMES, entry_key, frame_cells
 from mavconform.conformance.fidelity.classify import UPSTREAM_RESERVED, classify
 from mavconform.conformance.fidelity.predict import predict
 from mavconform.conformance.fidelity.run import survey
@@ -24,7 +24,7 @@ from mavconform.reports.run_document import check_run
 
 def _cells(target: str) -> dict[tuple, dict]:
     doc = survey(parse_target(target), virtual=True).doc
-    return {(e["plan_type"], e["frame"], e["command"]): e for e in doc["fidelity"]["cells"]}
+    return {entry_key(e)[:3]: e for e in doc["fidelity"]["cells"]}
 
 
 @pytest.mark.parametrize("profile", ["spec", "px4", "px4-fixedwing", "ardupilot", "ardupilot-plane"])
@@ -67,13 +67,13 @@ def test_the_classes_follow_the_rules() -> None:
     assert classify([vertex], [replace(vertex, frame=5)], spec) == f"changed:frame 3->5 (rule: {UPSTREAM_RESERVED})"
     compact = StoredForm(storage="compact15", basis="A13")
     ret = MissionItem(0, 0, 5000, 0.0, 0.0, 0.0, 0.0, 1, 2, 20.0, 0, 1, MissionType.FENCE)   # no altitude kept
-    assert classify([ret], [replace(ret, z=0.0)], compact) == "changed:z 20.0->0.0 (rule: compact15 item storage (A13))"
+    assert classify([ret], [replace(ret, z=0.0)], compact) == "changed:z 20.0->0.0 (rule: compact15 item storage)"
     assert classify([ret], [replace(ret, z=0.0)], spec) == "changed:z 20.0->0.0"
 
 
 def test_a_refusal_is_predicted_with_its_code() -> None:
     px4 = load_profile("px4")
-    cell = next(c for c in frame_cells() if c.key == ("mission", 1, 16))
+    cell = next(c for c in frame_cells() if c.key == ("mission", 1, 16, ""))
     assert predict(cell, px4.behaviour, StoredForm()) == "refused:UNSUPPORTED_FRAME"
 
 
@@ -91,12 +91,13 @@ def test_the_command_writes_the_matrix(tmp_path, capsys) -> None:
     assert fid["exchanges"][entry["exchange"]][0]["msg"] == "MISSION_COUNT" and len(fid["exchanges"]) == fid["uploads"]
     assert len(entry["sent"]) == 3 and entry["class"] == "exact" and entry["back"] == entry["sent"]
     assert doc["restore"]["status"] in ("restored", "unchanged")
-    assert "| 3 GLOBAL_RELATIVE_ALT | exact |" in (tmp_path / "fidelity.md").read_text()
-    page = (tmp_path / "fidelity.html").read_text()
-    assert page.count("<td class=\"exact\" title=\"exact\">") == 30 and 'id="xfence-3-5001"' in page and "MISSION_COUNT" in page
+    assert "| 3 GLOBAL_RELATIVE_ALT | exact |" in (tmp_path / "run.md").read_text()
+    page = (tmp_path / "run.html").read_text()
+    assert page.count("<td class=\"exact\" title=\"exact\">") == 30 and "MISSION_COUNT" in page
+    assert f'href="#e{entry["exchange"]}"' in page and f'id="e{entry["exchange"]}"' in page
     assert main(["fidelity", "--target", "mutant:drops-relative-alt-int", "-q", "--report-dir", str(tmp_path)]) == 1
-    assert "⚠ profile: exact" in (tmp_path / "fidelity.md").read_text()
-    assert '<td class="changed ruleless unlike" title="changed:frame 6-&gt;5">' in (tmp_path / "fidelity.html").read_text()
+    assert "⚠ profile: exact" in (tmp_path / "run.md").read_text()
+    assert '<td class="changed ruleless unlike" title="changed:frame 6-&gt;5">' in (tmp_path / "run.html").read_text()
 
 
 def test_report_diff_shows_exactly_the_cells_that_differ(tmp_path, capsys) -> None:
