@@ -18,15 +18,16 @@ every MAV_FRAME × each plan type's item kinds (mission waypoint; fence polygon 
 return point; rally point). The command matrix: every mission command of upstream common.xml,
 its nominal item and then, for a command the target takes, each param probed with values from
 its definition (bounds and one step past them, enum values, NaN where upstream says what it
-means, INT32_MAX where it means "no location", reserved params, a float's precision). Each cell's class is judged by the rules alone: `refused:<MISSION_ACK result>`,
-`exact`, `int_twin` (only the frame came back as its INT-encoding twin, 0<->5, 3<->6, 10<->11, as
+means, INT32_MAX where it means "no location", reserved params, a float's precision).
+Each cell's class is judged by the rules alone: `refused:<MISSION_ACK result>`, `exact`,
+`int_twin` (only the frame came back as its INT-encoding twin, 0<->5, 3<->6, 10<->11, as
 upstream allows), or `changed:<field from->to>` with `(rule: ...)` when a documented rule
-explains it (upstream's reserved params, or the profile's storage form with its VARIANTS.md
-row). Beside it, `predicted`: what the target's profile (--profile, or the one its HEARTBEAT
-names) says from its declared rules; a cell unlike its prediction is marked and fails the run
-(exit 1): either the vehicle changes something no rule says, or the profile lacks a rule.
-Cells of one kind (or one command) go up in one upload where the target takes them all; a
-refused cell is taken out and the rest go up again. The target's plans are read first and put back after.
+explains it (upstream's reserved params, or the profile's storage form, named by its id).
+Beside it, `predicted`: what the target's profile (--profile, or the one its HEARTBEAT names)
+says from its declared rules; a cell unlike its prediction is marked and fails the run (exit
+1): either the vehicle changes something no rule says, or the profile lacks a rule. Cells of
+one kind (or one command) go up in one upload where the target takes them all; a refused cell
+is taken out and the rest go up again. The target's plans are read first and put back after.
 Writes the usual reports to --report-dir: run.json (the matrix under `fidelity`, docs/fidelity.md
 says the format), run.html (the matrices in colour, each cell linked to its exchange), run.md
 (the matrices as Markdown tables to paste into an issue) and run.junit.xml.

@@ -108,7 +108,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="where fuzz.json/.junit.xml/.md/.html go (default reports/fuzz)")
     p.add_argument("--database", default=".hypothesis/fuzz", metavar="DIR|none|redis://HOST:PORT",
                    help="Hypothesis example database shared by campaigns: a directory (default "
-                        ".hypothesis/fuzz), 'none', or a Redis server for a fleet (needs hypothesis[redis])")
+                        ".hypothesis/fuzz), 'none', or a Redis server for a fleet of machines")
     p.add_argument("--profile", metavar="NAME|FILE",
                    help="external targets (udp:, tcp:, serial: ...): the vehicle profile whose rules the oracles apply (home in "
                         "slot 0, compact storage, non-atomic upload, retries); default: from the "
@@ -274,6 +274,25 @@ def _writable(option: str, folder: str) -> None:
         raise UsageError(f"{option} {folder}: cannot write there ({exc.strerror or exc})") from None
 
 
+REDIS_CONNECT_TIMEOUT = 3.0      # s to reach a fleet's Redis server, and for each command after
+
+
+def _redis_database(url: str) -> Any:
+    """A fleet's shared database, checked once with a PING (bounded): a server that cannot be
+    reached is the user's address, a one-line error, not a tool error mid-campaign."""
+    import redis
+    from hypothesis.extra.redis import RedisExampleDatabase
+    try:
+        client = redis.Redis.from_url(url, socket_connect_timeout=REDIS_CONNECT_TIMEOUT,
+                                      socket_timeout=REDIS_CONNECT_TIMEOUT)
+        client.ping()
+    except ValueError as exc:
+        raise UsageError(f"--database {url}: not a Redis address ({exc})") from None
+    except redis.exceptions.RedisError as exc:
+        raise UsageError(f"--database {url}: cannot reach the Redis server ({exc})") from None
+    return RedisExampleDatabase(client)
+
+
 def open_database(spec: str) -> Any:
     """'none', a directory, or redis://HOST:PORT -> a Hypothesis ExampleDatabase (or None)."""
     from hypothesis.database import DirectoryBasedExampleDatabase
@@ -282,13 +301,7 @@ def open_database(spec: str) -> Any:
     if text.lower() == "none":
         return None
     if text.startswith("redis://"):
-        try:
-            import redis  # type: ignore[import-not-found]
-            from hypothesis.extra.redis import RedisExampleDatabase
-        except ImportError:
-            raise UsageError(f"--database {spec}: a Redis database needs "
-                             "`pip install 'hypothesis[redis]'`") from None
-        return RedisExampleDatabase(redis.Redis.from_url(text))
+        return _redis_database(text)
     if "://" in text:
         raise UsageError(f"--database {spec!r}: expected a directory, 'none' or redis://HOST:PORT")
     path = Path(text)

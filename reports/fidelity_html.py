@@ -64,7 +64,8 @@ def _event(event: dict[str, Any]) -> str:
 def _frame_matrix(cells: list[dict[str, Any]]) -> list[str]:
     by = {entry_key(e)[:3]: e for e in cells}
     out = [f"<h2>Frames × plan types ({len(cells)} cells)</h2>",
-           '<table class="matrix"><tr><th>frame</th>' + "".join(f"<th>{escape(t)}</th>" for _, _, t in COLUMNS) + "</tr>"]
+           '<table class="matrix"><tr><th>frame</th>'
+           + "".join(f"<th>{escape(t)}</th>" for _, _, t in COLUMNS) + "</tr>"]
     for f in sorted({e["frame"] for e in cells}):
         row = "".join(_cell(by[(pt, f, cmd)]) if (pt, f, cmd) in by else "<td></td>" for pt, cmd, _ in COLUMNS)
         out.append(f"<tr><th>{f} {escape(FRAME_NAMES.get(f, ''))}</th>{row}</tr>")

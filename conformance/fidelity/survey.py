@@ -5,8 +5,8 @@ of one command (command matrix), go up in one upload where the target takes them
 refusal ends an upload at the item it answers: that cell is refused, and the rest go up again
 without it; a refusal that answers no item (the count) splits the batch into one upload per
 cell. A command's nominal item goes first and alone: a command the target does not take has
-no param cells. A fence's return point goes alone (a fence holds one). Where the target keeps its home in mission slot 0
-(ArduPilot, A1), a placeholder waypoint goes first and is not judged. Each upload and
+no param cells. A fence's return point goes alone (a fence holds one). Where the target keeps
+its home in mission slot 0 (ArduPilot, A1), a placeholder waypoint goes first and is not judged. Each upload and
 download is the suite's own bounded procedure (harness/procedures.py): a target that does
 not answer leaves its cells `unanswered`, never a hang.
 """
@@ -96,6 +96,8 @@ def _refused_cell(t: Tester, cells: list[Cell], lead: int) -> int | None:
             return n
         at -= len(cell.items)
     return None
+
+
 def _upload_and_read(t: Tester, cells: list[Cell], lead: list[MissionItem],
                      items: list[MissionItem]) -> list[dict[str, Any]] | str:
     plan_type = cells[0].plan_type

@@ -75,6 +75,8 @@ def test_a_replayed_case_that_no_longer_fails_exits_0(tmp_path, capsys) -> None:
     (["--target", "builtin:spec", "--profile", "px4"], "--profile applies to external (udp:, tcp:, serial: ...) targets"),
     (["--target", "udp:127.0.0.1:9", "--profile", "no-such-profile"], "no-such-profile"),
     (["--database", "redis-ish://x"], "--database"),
+    (["--database", "redis://127.0.0.1:1"], "--database redis://127.0.0.1:1: cannot reach the Redis server"),
+    (["--database", "redis://127.0.0.1:port"], "not a Redis address"),
     (["--database", "plain-file/db"], "cannot create the directory"),   # issue 12: not silently nothing
 ])
 def test_usage_mistakes_exit_2_with_one_line(tmp_path, capsys, monkeypatch, args, says) -> None:
