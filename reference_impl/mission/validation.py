@@ -208,10 +208,10 @@ _LAT_LON_RULES: tuple[ItemRule, ...] = (
 )
 _ALTITUDE_FINITE = ItemRule("altitude finite", MissionResult.INVALID_PARAM7,
                             _positional, lambda it: math.isfinite(it.z))
-_COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (
-    ItemRule("waypoint hold time >= 0", MissionResult.INVALID_PARAM1,
-             lambda it: it.command == Cmd.NAV_WAYPOINT,
-             lambda it: math.isnan(it.param1) or it.param1 >= 0),
+_HOLD_TIME = ItemRule("waypoint hold time >= 0", MissionResult.INVALID_PARAM1,
+                      lambda it: it.command == Cmd.NAV_WAYPOINT,
+                      lambda it: math.isnan(it.param1) or it.param1 >= 0)
+_FENCE_VALUE_RULES: tuple[ItemRule, ...] = (
     ItemRule("fence polygon vertex count is an integer >= 3", MissionResult.INVALID_PARAM1,
              lambda it: it.command in (Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION,
                                        Cmd.NAV_FENCE_POLYGON_VERTEX_EXCLUSION),
@@ -219,6 +219,8 @@ _COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (
     ItemRule("fence circle radius > 0", MissionResult.INVALID_PARAM1,
              lambda it: it.command in (Cmd.NAV_FENCE_CIRCLE_INCLUSION, Cmd.NAV_FENCE_CIRCLE_EXCLUSION),
              lambda it: math.isfinite(it.param1) and it.param1 > 0),
+)
+_JUMP_RULES: tuple[ItemRule, ...] = (
     ItemRule("jump target is a whole seq >= 0", MissionResult.INVALID_PARAM1,
              lambda it: it.command == Cmd.DO_JUMP,
              lambda it: math.isfinite(it.param1) and it.param1 >= 0 and it.param1 == int(it.param1)),
@@ -226,6 +228,7 @@ _COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (
              lambda it: it.command == Cmd.DO_JUMP,
              lambda it: math.isfinite(it.param2) and it.param2 >= -1),
 )
+_COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (_HOLD_TIME, *_FENCE_VALUE_RULES, *_JUMP_RULES)
 
 
 def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
@@ -255,7 +258,6 @@ def _c_int(v: float) -> int:
     return math.trunc(v) if math.isfinite(v) else -2**31      # C's (int) of a float on x86-64
 
 
-_FENCE_VALUE_RULES = _COMMAND_VALUE_RULES[1:3]
 # PX4 v1.16.0 parse_mavlink_mission_item (P28): no check of a hold time, a jump or an altitude;
 # a region of interest's mode must be one its frame knows (L1480-1491: global frames
 # MAV_ROI_LOCATION or NONE; L1574-1581: MAV_FRAME_MISSION NONE, WPNEXT or WPINDEX)
