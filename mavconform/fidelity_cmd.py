@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from mavconform.conformance.fidelity.run import SCOPES, survey
-from mavconform.conformance.fidelity.table import short
+from mavconform.conformance.fidelity.table import short, unlike
 from mavconform.conformance.target_uri import FORMS, parse_target
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reports.write import write_reports
@@ -70,8 +70,8 @@ def run(args: argparse.Namespace) -> int:
     result = survey(uri, scope=args.matrix_scope, on_cell=show)
     doc = result.doc
     fid = doc["fidelity"]
-    unlike = [e for e in fid["cells"] if e.get("as_predicted") is False]
-    if unlike or result.unresponsive:
+    differ = unlike(fid["cells"])
+    if differ or result.unresponsive:
         doc["summary"]["verdict"] = "fail"
     write_reports(doc, out)
     if result.unresponsive:
@@ -83,6 +83,6 @@ def run(args: argparse.Namespace) -> int:
         counts[kind] = counts.get(kind, 0) + 1
     print(f"\n{len(fid['cells'])} cells in {fid['uploads']} uploads: "
           + ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
-          + f"; profile {fid['profile']}: {len(unlike)} unlike its prediction; restore: {doc['restore']['status']}")
+          + f"; profile {fid['profile']}: {len(differ)} unlike its prediction; restore: {doc['restore']['status']}")
     print(f"reports in {out}/ (run.json, run.html, run.md, run.junit.xml)")
-    return 1 if unlike else 0
+    return 1 if differ else 0

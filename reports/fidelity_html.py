@@ -8,7 +8,7 @@ from html import escape
 from typing import Any
 
 from mavconform.conformance.fidelity.cells import FRAME_NAMES, entry_key
-from mavconform.conformance.fidelity.table import COLUMNS, command_name, legend, refused_as_such, short
+from mavconform.conformance.fidelity.table import COLUMNS, command_name, legend, refused_as_such, short, unlike
 
 STYLE = """
 table.matrix { border-collapse: collapse; font-size: .85em; }
@@ -101,10 +101,9 @@ def fidelity_sections(doc: dict[str, Any]) -> list[str]:
     upload's exchange (a cell's link target)."""
     fid = doc["fidelity"]
     cells = fid["cells"]
-    unlike = sum(1 for e in cells if e.get("as_predicted") is False)
     out = [f"<style>{STYLE}</style>", "<h2>Fidelity survey</h2>",
            f"<p>{len(cells)} cells in {fid['uploads']} uploads; profile {escape(str(fid['profile']))} "
-           f"({escape(str(fid.get('basis') or ''))}): <b>{unlike}</b> cell(s) unlike its prediction (outlined). "
+           f"({escape(str(fid.get('basis') or ''))}): <b>{len(unlike(cells))}</b> cell(s) unlike its prediction (outlined). "
            "Green: exact or INT twin; grey: refused; yellow: changed, a documented rule explains it; red: "
            "changed, no rule does. A cell links to its exchange.</p>"]
     rules = legend(fid)

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
+from mavconform.conformance.fidelity.table import unlike
 from mavconform.reports import run_document as rd
 from mavconform.reports.deciding import deciding_event, recorded_event
 from mavconform.reports.fidelity_html import fidelity_sections
@@ -134,8 +135,8 @@ def html_report(doc: dict[str, Any], *, folder: str | Path | None = None) -> str
 
 def _why_verdict(doc: dict[str, Any]) -> str:
     if "fidelity" in doc:
-        unlike = sum(1 for e in doc["fidelity"]["cells"] if e.get("as_predicted") is False)
-        return f"{unlike} fidelity cell{'' if unlike == 1 else 's'} unlike the profile's prediction"
+        n = len(unlike(doc["fidelity"]["cells"]))
+        return f"{n} fidelity cell{'' if n == 1 else 's'} unlike the profile's prediction"
     n = doc["summary"]["gating_failures"]
     return f"{n} gating failure{'' if n == 1 else 's'}"
 

@@ -21,6 +21,7 @@ from mavconform.reference_impl.mission.store import STORAGE_FORMS
 
 from ..harness.stored_form import StoredForm
 from .command_facts import COMMANDS
+from .probes import FIELD
 
 FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z", "autocontinue")
 UPSTREAM_RESERVED = ("upstream: INT-twin frames, Reserved params, no autocontinue on fence and rally items, "
@@ -82,10 +83,8 @@ def _without_reserved(item: MissionItem) -> MissionItem:
     fact = COMMANDS.get(int(item.command))
     if fact is None:
         return item
-    blank: dict[str, Any] = {}
-    for index, p in enumerate(fact.params, start=1):
-        if p.reserved:
-            blank[("param1", "param2", "param3", "param4", "x", "y", "z")[index - 1]] = 0 if index in (5, 6) else 0.0
+    blank = {FIELD[index]: 0 if index in (5, 6) else 0.0
+             for index, p in enumerate(fact.params, start=1) if p.reserved}
     return replace(item, **blank)
 
 

@@ -145,12 +145,16 @@ def _settle(t: Tester, survey: Survey, members: list[Cell]) -> list[dict[str, An
         if at is None:
             break
         n = remaining.pop(at)
-        decided[n] = {**_entry(members[n], result, None), "exchange": len(survey.exchanges) - 1}
+        decided[n] = _unstored(survey, members[n], result)
     for n in remaining:
         one, _ = _try(t, survey, [members[n]])
-        decided[n] = one[0] if isinstance(one, list) else {**_entry(members[n], one, None),
-                                                           "exchange": len(survey.exchanges) - 1}
+        decided[n] = one[0] if isinstance(one, list) else _unstored(survey, members[n], one)
     return [decided[n] for n in range(len(members))]
+
+
+def _unstored(survey: Survey, cell: Cell, why: str) -> dict[str, Any]:
+    """The entry of a cell the last upload did not store ("refused:NAME", "unanswered")."""
+    return {**_entry(cell, why, None), "exchange": len(survey.exchanges) - 1}
 
 
 def run_survey(t: Tester, cells: list[Cell], on_cell: OnCell | None = None) -> Survey:

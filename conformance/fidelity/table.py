@@ -50,6 +50,11 @@ def cell_text(entry: dict[str, Any]) -> str:
     return text
 
 
+def unlike(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The cells that came out otherwise than the profile predicted."""
+    return [e for e in cells if e.get("as_predicted") is False]
+
+
 def as_sent(cls: str) -> bool:
     return cls in ("exact", "int_twin")
 
@@ -57,9 +62,8 @@ def as_sent(cls: str) -> bool:
 def markdown(fidelity: dict[str, Any]) -> str:
     frame_cells = [e for e in fidelity["cells"] if not e.get("probe")]
     command_cells = [e for e in fidelity["cells"] if e.get("probe")]
-    unlike = sum(1 for e in fidelity["cells"] if e.get("as_predicted") is False)
     out = [f"{len(fidelity['cells'])} cells, {fidelity['uploads']} uploads; profile {fidelity['profile']}: "
-           f"{unlike} cell(s) unlike its prediction (⚠)", ""]
+           f"{len(unlike(fidelity['cells']))} cell(s) unlike its prediction (⚠)", ""]
     if frame_cells:
         out += _frames(frame_cells) + [""]
     if command_cells:

@@ -30,12 +30,12 @@ import math
 import struct
 from typing import Callable, Sequence
 
+from mavconform.reference_impl.mission.c_numbers import Number, i8, i16, i32, u8, u16, u16_via64, u32, wrap
 from mavconform.reference_impl.mission.constants import MissionResult
 from mavconform.reference_impl.mission.items import MissionItem, MissionType, to_float32
 
 __all__ = ["ACCEPTED_COMMANDS", "LOCATION_COMMANDS", "refusal", "round_trip"]
 
-Number = float | int
 Slots = tuple[float, float, float, float, int, int, float]  # param1-4, x, y, z on download
 
 # --- C conversions --------------------------------------------------------------------------
@@ -44,32 +44,6 @@ _F32 = struct.Struct("<f")
 _U32 = struct.Struct("<I")
 FLT_EPSILON = 2.0 ** -23
 _CENTI = to_float32(0.01)  # 0.01f
-
-
-def _cvtt(value: float, bits: int) -> int:
-    """cvttss2si into a `bits`-wide register: truncate; NaN or out of range -> INT_MIN."""
-    limit = 2 ** (bits - 1)
-    if value != value or not -limit <= value < limit:
-        return -limit
-    return int(value)
-
-
-def _wrap(value: int, bits: int, signed: bool) -> int:
-    value &= (1 << bits) - 1
-    return value - (1 << bits) if signed and value >> (bits - 1) else value
-
-
-def _int_conv(bits: int, signed: bool, via: int = 32) -> Callable[[Number], int]:
-    def conv(value: Number) -> int:
-        raw = value if isinstance(value, int) else _cvtt(value, via)
-        return _wrap(raw, bits, signed)
-    return conv
-
-
-u8, i8, u16, i16 = _int_conv(8, False), _int_conv(8, True), _int_conv(16, False), _int_conv(16, True)
-u16_via64 = _int_conv(16, False, via=64)  # (NAV_VTOL_LAND_OPTIONS)float: unsigned enum, 64-bit cvt
-u32 = _int_conv(32, False, via=64)
-i32 = _int_conv(32, True)
 
 
 def f32(value: Number) -> float:
@@ -329,7 +303,7 @@ def round_trip(item: MissionItem) -> MissionItem:
                 slots[i] = conv(sources[i])
     frame = 0
     if cmd in LOCATION_COMMANDS:
-        alt_cm = _wrap(i32(fmul(item.z, 100)), 24, signed=True)  # L1491, 24-bit storage
+        alt_cm = wrap(i32(fmul(item.z, 100)), 24, signed=True)  # L1491, 24-bit storage
         slots[4], slots[5] = item.x, item.y
         slots[6] = fmul(alt_cm, _CENTI)  # L2002
         frame = DOWNLOAD_FRAME[item.frame]

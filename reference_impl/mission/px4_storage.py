@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from .c_numbers import i16, i32, u16
 from .items import MissionItem, MissionType, to_float32
 
 GLOBAL = (0, 3, 5, 6)
@@ -56,21 +57,9 @@ def _flag(v: float) -> float:
     return 1.0 if v > 0 else 0.0      # NaN > 0 is false
 
 
-def _c_int(v: float, bits: int, signed: bool) -> float:
-    """A float converted to a C integer field as x86-64 does it (NaN or out of range: wraps
-    through int32, as the observed -1.0 -> 65535 for a uint16)."""
-    if not math.isfinite(v):
-        return 0.0
-    n = math.trunc(v) & ((1 << bits) - 1)
-    if signed and n >= 1 << (bits - 1):
-        n -= 1 << bits
-    return float(n)
-
-
 def _c_round_int32(v: float) -> int:
     """`item_int->x = round(params[4])` of a float32 param: out of int32 range gives INT32_MIN."""
-    r = math.floor(v + 0.5) if v >= 0 else math.ceil(v - 0.5)
-    return r if -2**31 <= r < 2**31 else -2**31
+    return i32(float(math.floor(v + 0.5) if v >= 0 else math.ceil(v - 0.5)))
 
 
 # command -> (param1..param4 as the download gives them), from params (p1, p2, p3, p4)
@@ -78,7 +67,7 @@ _GLOBAL_KEPT = {
     16: lambda p: (p[0], p[1], 0.0, yaw_round_trip(p[3])),                   # NAV_WAYPOINT
     17: lambda p: (0.0, 0.0, p[2], yaw_round_trip(p[3])),                    # NAV_LOITER_UNLIM
     19: lambda p: (p[0], _flag(p[1]), p[2], _flag(p[3])),                    # NAV_LOITER_TIME
-    21: lambda p: (0.0, _c_int(p[1], 16, False), 0.0, yaw_round_trip(p[3])),  # NAV_LAND
+    21: lambda p: (0.0, float(u16(p[1])), 0.0, yaw_round_trip(p[3])),  # NAV_LAND
     22: lambda p: (0.0, 0.0, 0.0, yaw_round_trip(p[3])),                     # NAV_TAKEOFF
     31: lambda p: (_flag(p[0]), p[1], 0.0, _flag(p[3])),                     # NAV_LOITER_TO_ALT
     84: lambda p: (0.0, 0.0, 0.0, yaw_round_trip(p[3])),                     # NAV_VTOL_TAKEOFF
@@ -98,7 +87,7 @@ def px4_mission_item(item: MissionItem) -> MissionItem:
     if item.frame == MISSION_FRAME:
         p1, p2 = item.param1, item.param2
         if command == DO_JUMP:
-            p1, p2 = _c_int(p1, 16, True), _c_int(p2, 16, False)
+            p1, p2 = float(i16(p1)), float(u16(p2))
         return replace(item, command=command, param1=p1, param2=p2,
                        x=_c_round_int32(to_float32(float(item.x))), y=_c_round_int32(to_float32(float(item.y))))
     return item

@@ -17,7 +17,7 @@ from dataclasses import replace
 from typing import Callable, Iterable, Sequence
 
 from .ardupilot_commands import round_trip as ardupilot_round_trip
-from .ardupilot_commands import u16
+from .c_numbers import i32, u16
 from .constants import Cmd
 from .items import FRAME_MISSION, PLAIN_FRAME, PLAN_TYPES, MissionItem, MissionType, to_float32
 from .px4_storage import px4_mission_item
@@ -149,13 +149,6 @@ def _ardupilot_plane(item: MissionItem) -> MissionItem:
                    param3=float(min(0xFF, u16(item.param3))), param4=0.0)
 
 
-def _c_int32(value: float) -> int:
-    """C's float-to-int32 cast on x86: truncated toward zero; NaN or out of range: INT32_MIN."""
-    if not math.isfinite(value) or not -2**31 <= math.trunc(value) < 2**31:
-        return -2**31
-    return math.trunc(value)
-
-
 def _float32_cm(item: MissionItem) -> MissionItem:
     """A waypoint record filled from MISSION_ITEM in float32 arithmetic and read back the same
     way (INAV 9.1 src/main/telemetry/mavlink.c:1124-1131 and 1191-1201): latitude and longitude
@@ -165,8 +158,8 @@ def _float32_cm(item: MissionItem) -> MissionItem:
     if item.mission_type is not MissionType.MISSION:
         return item
     fx, fy = item.float_xy()
-    lat, lon = _c_int32(to_float32(fx * 1e7)), _c_int32(to_float32(fy * 1e7))
-    alt = _c_int32(to_float32(to_float32(item.z) * 100.0))
+    lat, lon = i32(to_float32(fx * 1e7)), i32(to_float32(fy * 1e7))
+    alt = i32(to_float32(to_float32(item.z) * 100.0))
     frame = FRAME_MISSION if item.command == Cmd.NAV_RETURN_TO_LAUNCH else 3
     x, y = MissionItem.int_xy_from_float(frame, to_float32(to_float32(lat) / 1e7), to_float32(to_float32(lon) / 1e7))
     return replace(item, frame=frame, param1=0.0, param2=0.0, param3=0.0, param4=0.0, x=x or 0, y=y or 0,

@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import AbstractSet, Callable, Mapping, Sequence
 
+from .c_numbers import i32, u16
 from .commands import LOCATION_COMMANDS
 from .constants import (
     FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
@@ -254,16 +255,12 @@ def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
             *_FIELD_RULES, *lat_lon, *finite, *altitude_rules(location_alt_max), *values)
 
 
-def _c_int(v: float) -> int:
-    return math.trunc(v) if math.isfinite(v) else -2**31      # C's (int) of a float on x86-64
-
-
 # PX4 v1.16.0 parse_mavlink_mission_item (P28): no check of a hold time, a jump or an altitude;
 # a region of interest's mode must be one its frame knows (L1480-1491: global frames
 # MAV_ROI_LOCATION or NONE; L1574-1581: MAV_FRAME_MISSION NONE, WPNEXT or WPINDEX)
 _PX4_ROI = ItemRule("region-of-interest mode known for the frame", MissionResult.INVALID_PARAM1,
                     lambda it: _in_mission(it) and it.command in (Cmd.NAV_ROI, Cmd.DO_SET_ROI),
-                    lambda it: _c_int(it.param1) in ((0, 1, 2) if it.frame == FRAME_MISSION else (0, 3)))
+                    lambda it: i32(it.param1) in ((0, 1, 2) if it.frame == FRAME_MISSION else (0, 3)))
 # ArduCopter (531699d6): a waypoint's hold time is a uint16 (AP_Mission.cpp L1104-1106:
 # INVALID_PARAM1 outside 0..65535); DO_JUMP's target is a uint16 and must name an item after
 # home (MissionItemProtocol_Waypoints.cpp L40-44: target 0 gets MAV_MISSION_ERROR; a target past
@@ -273,7 +270,7 @@ _AP_HOLD = ItemRule("waypoint hold time within 0..65535 s", MissionResult.INVALI
                     lambda it: math.isnan(it.param1) or 0 <= it.param1 <= 65535)
 _AP_JUMP = ItemRule("jump target after home", MissionResult.ERROR,
                     lambda it: it.command == Cmd.DO_JUMP and _in_mission(it),
-                    lambda it: _c_int(it.param1) & 0xFFFF != 0)
+                    lambda it: u16(it.param1) != 0)
 # value_rules -> (the altitude rule, the per-command value rules)
 VALUE_RULES: dict[str, tuple[tuple[ItemRule, ...], tuple[ItemRule, ...]]] = {
     "spec": ((_ALTITUDE_FINITE,), _COMMAND_VALUE_RULES),
