@@ -35,6 +35,7 @@ class RunOptions:
     strict: bool = False
     time_scale: float = 1.0
     seed: int = 0
+    clock_speed: float | None = None        # --clock-speed (None: the session's default)
     expectations: str | None = None
     baseline: str | None = None
     handover_scenario: str | None = None   # --handover-scenario (None: the conformance scenario)

@@ -18,6 +18,7 @@ import time
 from typing import Any, Callable
 
 from mavconform.reference_impl.mission.messages import is_vehicle_heartbeat
+from mavconform.reference_impl.net.clock import MonotonicClock, ScaledClock
 from mavconform.reference_impl.net.guard import GuardedNode
 from mavconform.reference_impl.net.links import attach
 from mavconform.reference_impl.net.receive_queue import total_drops
@@ -40,6 +41,11 @@ DISCOVERY_TIMEOUT = 5.0   # s for the first HEARTBEAT (heartbeats are 1 Hz), sca
 # descents; holds and protocol timers keep their length), as one runs SITL with --speedup: its
 # flights are protocol exchanges spread over minutes of waiting, not what a clause judges
 BUILTIN_FLIGHT_SPEEDUP = 4.0
+# An in-process target and its testers share one clock, by default this many times real time
+# (reference_impl/net/clock.ScaledClock): every timer, stream, timeout and bound runs in that
+# clock's seconds, so the run judges what a real-time one does in a quarter of the wall time.
+# An external target lives in real time (1).
+BUILTIN_CLOCK_SPEED = 4.0
 
 
 def build_vehicle(uri: TargetUri, *, wall_clock: Callable[[], float] = time.time,
@@ -70,14 +76,23 @@ class Session:
 
     `config`: a `builtin:` target's vehicle built from this `VehicleConfig` instead of its
     profile's (the suite's own overrides still apply), so a test can run the clauses against
-    a vehicle with any set of knobs (conformance/knob_judges.py)."""
+    a vehicle with any set of knobs (conformance/knob_judges.py).
+
+    `clock_speed`: for an in-process target over real sockets, how many clock seconds the
+    vehicle and the testers live in each real one (None: BUILTIN_CLOCK_SPEED; an external
+    target: 1, the only speed it can have)."""
 
     def __init__(self, uri: TargetUri, *, scale: float = 1.0, virtual: bool = False,
                  seed: int = 0, allow_flight: bool | None = None,
                  capture: CaptureHook | None = None, shared_link: bool | None = None,
-                 config: VehicleConfig | None = None) -> None:
+                 config: VehicleConfig | None = None, clock_speed: float | None = None) -> None:
         if config is not None and uri.kind != "builtin":
             raise ValueError("a vehicle config replaces a builtin target's profile only")
+        if clock_speed is None:
+            clock_speed = BUILTIN_CLOCK_SPEED if uri.in_process and not virtual else 1.0
+        elif clock_speed != 1.0 and not (uri.in_process and not virtual):
+            raise ValueError("only an in-process target over real sockets runs on a faster clock")
+        self.clock_speed = clock_speed
         self.uri = uri
         self.scale = scale
         self.virtual = virtual
@@ -111,11 +126,12 @@ class Session:
             self.vehicle.endpoint.add_address("tester")
             node.endpoint.add_address("vehicle")
         else:
-            self.driver = UdpDriver(seed=seed)
+            clock = ScaledClock(clock_speed) if clock_speed != 1.0 else MonotonicClock()
+            self.driver = UdpDriver(clock, seed=seed)
             try:
                 if uri.in_process:
                     self.vehicle = build_vehicle(uri, base=config, **uri.suite_overrides(),
-                                                 flight_speedup=BUILTIN_FLIGHT_SPEEDUP)
+                                                 wall_clock=clock.wall, flight_speedup=BUILTIN_FLIGHT_SPEEDUP)
                     self.guard = GuardedNode(self.vehicle)
                     self.target_address = self.driver.add_node(self.guard)
                     tester_address = self.driver.add_node(self.link)
@@ -139,6 +155,8 @@ class Session:
             self.driver.add_capture(capture)
         self.stream = None if virtual else self.driver.stream_of(self.link)   # tcp:, serial: ...
         self.link_facts = link_facts("in-process" if uri.in_process else uri.kind, self.stream)
+        if clock_speed != 1.0:
+            self.link_facts["clock_speed"] = clock_speed
         self.t = Tester(node, self.driver, scale=scale)
         self.t.link_allowance = self.link_facts["reply_allowance_s"]
         self.t.int_forms = not self._profile_ignores_int()   # the forms probe may still find out

@@ -48,6 +48,9 @@ def prepare(options: document.RunOptions, *, levels: str | None = None,
     if options.handover_scenario:
         uri = uri.with_scenario(load_handover_scenario(options.handover_scenario))
     uri = uri.with_profile(options.profile)
+    if options.clock_speed is not None and options.clock_speed != 1.0 and not uri.in_process:
+        raise UsageError(f"--clock-speed: {uri} is an external target, which lives in real time "
+                         "(a faster clock is for builtin: and mutant: targets)")
     clauses = catalogue.select(options.clauses, levels)
     if not clauses:
         raise UsageError(f"no clause matches --clauses {options.clauses!r} with --level {levels!r}")
@@ -92,7 +95,8 @@ def execute(p: Prepared, *, virtual: bool = False, allow_flight: bool | None = N
     def clauses(guard: InterruptGuard, capture: CaptureHook | None, on_result: OnResult | None) -> RunOutcome:
         try:
             with Session(p.uri, scale=p.options.time_scale, virtual=virtual, seed=p.options.seed,
-                         allow_flight=allow_flight, capture=capture) as session:
+                         allow_flight=allow_flight, capture=capture,
+                         clock_speed=None if virtual else p.options.clock_speed) as session:
                 session.on_identity = p.expected.identify
                 run = run_clauses(session, p.clauses, on_result=on_result, restore=restore, guard=guard)
                 if session.guard is not None and session.guard.crash:

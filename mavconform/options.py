@@ -53,6 +53,17 @@ def time_scale(text: str) -> float:
     return value
 
 
+MAX_CLOCK_SPEED = 16.0   # past this, scheduling jitter (x speed) eats the protocol's bounds
+
+
+def clock_speed(text: str) -> float:
+    """--clock-speed: more than 0, at most MAX_CLOCK_SPEED."""
+    value = positive(text)
+    if value > MAX_CLOCK_SPEED:
+        raise argparse.ArgumentTypeError(f"{text!r} must be at most {MAX_CLOCK_SPEED:g}")
+    return value
+
+
 def seconds_up_to(high: float) -> Callable[[str], float]:
     """An argparse type: a number of seconds, more than 0 and at most `high`."""
     def parse(text: str) -> float:

@@ -54,10 +54,11 @@ from mavconform.conformance.msp import suite as msp_suite
 from mavconform.conformance.msp import target as msp_target
 from mavconform.conformance.msp.target import FORMS as MSP_FORMS
 from mavconform.conformance.msp.target import is_msp_target
+from mavconform.conformance.session import BUILTIN_CLOCK_SPEED
 from mavconform.conformance.target_uri import FORMS
 from mavconform.reference_impl.errors import UsageError
 
-from .options import sigterm_as_interrupt, time_scale
+from .options import clock_speed, sigterm_as_interrupt, time_scale
 
 MARK = {Outcome.PASS: "PASS", Outcome.FAIL: "FAIL", Outcome.KNOWN_DEVIATION: "KNOWN",
         Outcome.NOT_APPLICABLE: "N/A", Outcome.SKIPPED: "SKIP", Outcome.ERROR: "ERROR"}
@@ -97,6 +98,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="where the reports go (default reports/out)")
     p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
                    help="stretch every protocol wait by X for slow links (default 1)")
+    p.add_argument("--clock-speed", type=clock_speed, metavar="X",
+                   help="a builtin: or mutant: target and the suite share one clock running X times "
+                        f"real time: every timer, timeout and bound a clause judges is in its seconds "
+                        f"(default {BUILTIN_CLOCK_SPEED:g}; 1: real time). External targets live in real time")
     p.add_argument("--seed", type=int, default=0, help="seed recorded in the report (default 0)")
     p.add_argument("--allow-flight", action="store_true",
                    help="let progress clauses start the mission (always on for builtin targets)")
@@ -128,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
             options = document.RunOptions(target=args.target or "builtin:spec", clauses=args.clauses,
                                           strict=args.strict, time_scale=args.time_scale, seed=args.seed,
                                           expectations=args.expect, baseline=args.baseline,
-                                          handover_scenario=args.handover_scenario, profile=args.profile)
+                                          handover_scenario=args.handover_scenario, profile=args.profile,
+                                          clock_speed=args.clock_speed)
             prepared = suite.prepare(options, levels=args.level, report_dir=args.report_dir)
             print(f"mavconform: {len(prepared.clauses)} clauses against {prepared.uri}", flush=True)
             on_result = None if args.quiet else _printer()
@@ -167,7 +173,8 @@ def _run_msp(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     given = [flag for flag, value in (("--gcs-cmd", args.gcs_cmd),
                                       ("--gcs-timeout", args.gcs_timeout != gcs_suite.DEFAULT_TIMEOUT_S),
                                       ("--handover-scenario", args.handover_scenario),
-                                      ("--allow-flight", args.allow_flight), ("--profile", args.profile)) if value]
+                                      ("--allow-flight", args.allow_flight), ("--profile", args.profile),
+                                      ("--clock-speed", args.clock_speed is not None)) if value]
     if given:
         raise UsageError(f"{given[0]} is not for an MSP flight controller (--role msp)")
     options = document.RunOptions(target=args.target or msp_target.BUILTIN, clauses=args.clauses,
@@ -191,7 +198,8 @@ def _run_gcs(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     """The GCS side: the options a vehicle run has that mean nothing here are refused."""
     given = [flag for flag, value in (("--handover-scenario", args.handover_scenario),
                                       ("--allow-flight", args.allow_flight), ("--no-restore", args.no_restore),
-                                      ("--time-scale", args.time_scale != 1.0)) if value]
+                                      ("--time-scale", args.time_scale != 1.0),
+                                      ("--clock-speed", args.clock_speed is not None)) if value]
     if given:
         raise UsageError(f"{given[0]} is for --role vehicle (a GCS run has no vehicle of its own to fly, "
                          "restore or slow down; its bound is --gcs-timeout)")

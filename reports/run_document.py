@@ -22,7 +22,9 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
                [interrupted: bool, interrupted_at: clause id or phase, interrupted_by: SIGTERM],
                [link: {kind: in-process|udp|udpin|tcp|tcpin|serial, bytes_per_second (null: a
                        network link, not limited), reply_allowance_s: what the suite added to
-                       each reply wait for the link's speed (harness/link_timing.py)}]}
+                       each reply wait for the link's speed (harness/link_timing.py),
+                       [clock_speed: an in-process target and the suite shared a clock this
+                       many times real time; every time and bound is in its seconds]}]}
     identity  {system, component, [type, autopilot, mavlink_version, ...]} or null; an MSP
               flight controller's: {msp_api: "2.5", max_waypoints, [msp_protocol, waypoints,
               mission_valid]}
@@ -109,6 +111,7 @@ RUN_KNOWN = {"seed": ("integer", "null"), "time_scale": ("number",), "strict": (
              "interrupted": ("bool",), "interrupted_at": ("string", "null"),
              "interrupted_by": ("string", "null"), "link": ("object",)}
 LINK_KNOWN = {"kind": ("string",), "bytes_per_second": ("number", "null"), "reply_allowance_s": ("number",)}
+LINK_OPTIONAL = {"clock_speed": ("number",)}
 LINK_COUNTS = ("bytes_written", "bytes_read", "frames_dropped_link_down", "frames_dropped_queue_full",
                "connections")
 IDENTITY_KNOWN = {"type": ("integer",), "autopilot": ("integer",),
@@ -368,6 +371,8 @@ class _Checker:
         if isinstance(run.get("link"), dict):
             for key, kinds in LINK_KNOWN.items():
                 self.key(run["link"], key, "run.link", *kinds)
+            for key, kinds in LINK_OPTIONAL.items():
+                self.optional(run["link"], key, "run.link", *kinds)
 
     def identity(self, identity: dict | None) -> None:
         if identity is None:

@@ -141,11 +141,15 @@ def dropped_text(doc: dict[str, Any]) -> str | None:
 
 def link_text(doc: dict[str, Any]) -> str | None:
     """The link to the target and the timing used, for people: "serial at 5760 bytes/s:
-    each reply wait + 0.275 s; 1 connection"; None for an in-process target (or a run
-    document from before links were recorded)."""
+    each reply wait + 0.275 s; 1 connection"; for an in-process target, only the clock it
+    shared with the suite when faster than real; None otherwise (or for a run document from
+    before links were recorded)."""
     link = doc["run"].get("link")
     events = (doc.get("volatile") or {}).get("link")
     msp = msp_stream_text(events.get("msp") if events else None)
+    if link and link.get("clock_speed"):
+        return (f"in-process, on a clock {link['clock_speed']:g}x real time shared with the target: the "
+                "exchanges' times and every bound a clause judged are in that clock's seconds")
     if not link or link.get("kind") == "in-process":
         return msp
     rate = link.get("bytes_per_second")

@@ -3,6 +3,8 @@
 Engines and nodes never call `time.*` themselves; a driver hands them `now`. Two clocks
 exist: `SimClock`, virtual time moved only by `SimNetwork` (so a 7.5 s retry sequence costs
 microseconds and replays exactly), and `MonotonicClock`, real time for the UDP driver.
+`ScaledClock` is real time run faster: when both ends of a real socket are ours (an
+in-process vehicle), they can agree to live `speed` seconds in every real one.
 `wall()` exists because MAVLink 2 signing timestamps are Unix time; under `SimClock` it is
 a fixed epoch plus virtual time, so signed traffic is deterministic too.
 """
@@ -62,9 +64,35 @@ class MonotonicClock:
     """Real time: `time.monotonic()` for deadlines, `time.time()` for signing."""
 
     __slots__ = ()
+    speed = 1.0   # clock seconds per real second: what a driver divides a real wait by
 
     def now(self) -> float:
         return time.monotonic()
 
     def wall(self) -> float:
         return time.time()
+
+
+class ScaledClock:
+    """Real time `speed` times faster, from the moment it is made: `now()` and `wall()` both
+    move `speed` clock seconds per real second (signing timestamps stay in step with the
+    deadlines). Only for runs where every node reading it is ours: an external target lives
+    in real time."""
+
+    __slots__ = ("speed", "_origin", "_wall_origin")
+
+    def __init__(self, speed: float) -> None:
+        if not (math.isfinite(speed) and speed > 0.0):
+            raise ValueError(f"ScaledClock speed must be a finite number > 0, got {speed!r}")
+        self.speed = float(speed)
+        self._origin = time.monotonic()
+        self._wall_origin = time.time()
+
+    def now(self) -> float:
+        return self._origin + (time.monotonic() - self._origin) * self.speed
+
+    def wall(self) -> float:
+        return self._wall_origin + (time.monotonic() - self._origin) * self.speed
+
+    def __repr__(self) -> str:
+        return f"ScaledClock(speed={self.speed:g})"

@@ -167,12 +167,13 @@ class UdpDriver:
 
     def run_until(self, condition: Callable[[], bool], *, timeout: float,
                   max_steps: int = 10_000_000) -> bool:
-        """Serve sockets and timers until `condition()` holds or `timeout` real seconds
-        pass. Never blocks past the end or the earliest node deadline / fault timer."""
+        """Serve sockets and timers until `condition()` holds or `timeout` seconds of the
+        driver's clock pass. Never blocks past the end or the earliest node deadline / fault timer."""
         self._check_open()
         if not timeout >= 0.0:
             raise ValueError(f"run_until timeout must be >= 0 seconds, got {timeout!r}")
         clock = self.clock
+        speed = getattr(clock, "speed", 1.0)   # a ScaledClock's seconds pass faster than real ones
         now = clock.now()
         end = now + timeout
         self._flush(now)
@@ -218,7 +219,7 @@ class UdpDriver:
                     wake = d
             if streams:
                 self._sync_streams(now)
-            events = self._selector.select(max(0.0, wake - now))
+            events = self._selector.select(max(0.0, wake - now) / speed)
             if events:
                 now = clock.now()
                 for key, mask in events:

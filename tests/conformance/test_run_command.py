@@ -115,10 +115,14 @@ def test_dead_target_is_reported_fast(tmp_path, capsys) -> None:
     (["run", "--time-scale", "0"], "must be a finite number > 0"),
     (["run", "--time-scale", "-1"], "must be a finite number > 0"),     # issue 12: one message for both
     (["run", "--time-scale", "1e308"], "must be at most 100"),          # issue 12: not an endless wait
+    (["run", "--clock-speed", "0"], "must be a finite number > 0"),
+    (["run", "--clock-speed", "17"], "must be at most 16"),
+    (["run", "--target", "udp:127.0.0.1:9", "--clock-speed", "2"], "external target, which lives in real time"),
+    (["run", "--role", "gcs", "--clock-speed", "2"], "--clock-speed is for --role vehicle"),
     (["report", "render", "/nonexistent/run.json"], "/nonexistent/run.json"),
 ])
 def test_usage_mistakes_get_one_line_and_exit_2(argv, message, capsys, tmp_path) -> None:
-    with pytest.raises(SystemExit) if argv[1:2] == ["--time-scale"] else _no_raise():
+    with pytest.raises(SystemExit) if argv[1] in ("--time-scale", "--clock-speed") else _no_raise():
         code = main(argv + (["--report-dir", str(tmp_path)] if argv[0] == "run" else []))
         assert code == 2
     err = capsys.readouterr().err
@@ -262,6 +266,28 @@ def test_udp_localhost_target_in_another_process(tmp_path, capsys) -> None:
         vehicle.terminate()
         vehicle.wait(timeout=10)
     assert code == 0, out
+
+
+def test_the_builtin_vehicle_and_the_suite_share_a_faster_clock_and_the_report_says_so(tmp_path, capsys) -> None:
+    """Issue 27: the main job runs on a clock 4x real time; the timers judged (the 1 Hz
+    MISSION_CURRENT stream, an upload's item timeout) are in that clock's seconds, so they
+    pass at any speed, and the run says which clock it lived on. `--clock-speed 1` is real time."""
+    clauses = "MIS.CUR.06,MIS.UP.07"
+    code, out, _ = _run(capsys, "run", "--clauses", clauses, "--report-dir", str(tmp_path / "fast"))
+    assert code == 0, out
+    fast = json.loads((tmp_path / "fast" / "run.json").read_text())
+    assert fast["run"]["link"] == {"kind": "in-process", "bytes_per_second": None, "reply_allowance_s": 0.0,
+                                   "clock_speed": 4.0}
+    assert "on a clock 4x real time shared with the target" in out
+    assert "on a clock 4x real time" in (tmp_path / "fast" / "run.md").read_text()
+    code, out, _ = _run(capsys, "run", "--clauses", clauses, "--clock-speed", "1", "--report-dir", str(tmp_path / "real"))
+    assert code == 0, out
+    real = json.loads((tmp_path / "real" / "run.json").read_text())
+    assert "clock_speed" not in real["run"]["link"] and "on a clock" not in out
+    assert [c["outcome"] for c in real["clauses"]] == [c["outcome"] for c in fast["clauses"]] == ["pass", "pass"]
+    # a clause's own span is in clock seconds: about the same for both runs (the stream's 1 s period)
+    for doc in (fast, real):
+        assert doc["volatile"]["clauses"]["MIS.CUR.06"]["duration_s"] >= 1.0
 
 
 def test_time_scale_does_not_fail_correct_timers(tmp_path, capsys) -> None:

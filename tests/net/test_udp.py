@@ -63,6 +63,22 @@ def test_silent_peer_times_out():
         assert 0.2 <= elapsed < 1.0
 
 
+def test_a_scaled_clock_waits_its_own_seconds_in_less_real_time():
+    """A faster clock's timeout is in its seconds: the driver sleeps 1/speed of it for real."""
+    from mavconform.reference_impl.net.clock import ScaledClock
+    clock = ScaledClock(8.0)
+    with UdpDriver(clock=clock) as drv:
+        rec = RecorderNode()
+        drv.add_node(rec)
+        waits: list[float] = []
+        select = drv._selector.select
+        drv._selector.select = lambda timeout=None: (waits.append(timeout), select(timeout))[1]
+        start = clock.now()
+        assert drv.run_until(lambda: bool(rec.received), timeout=0.8) is False
+        assert clock.now() - start >= 0.8
+        assert waits and max(waits) <= 0.1 + 1e-9
+
+
 def test_wakes_for_node_deadline():
     clock = MonotonicClock()
     with UdpDriver(clock=clock) as drv:
