@@ -224,6 +224,31 @@ def _printer():
     return show
 
 
+def reading_lines(doc: dict[str, Any], width: int = 100) -> list[str]:
+    """The clauses not passing, in the reports' order (reports/reading_order.py): what fails
+    the run, the known deviations with what excuses each, what else did not pass, then one
+    line per reason for the clauses that do not apply or were skipped."""
+    from mavconform.reports.reading_order import group_title, reading_order
+    from mavconform.reports.text import one_line
+    order = reading_order(doc)
+    mark = {o.value: m for o, m in MARK.items()}
+    out: list[str] = []
+    for title, members in (("fails the run", order.failing), ("known deviations", order.deviations),
+                           ("did not pass, does not fail the run", order.other)):
+        if members:
+            out.append(f"{title} ({len(members)}):")
+            for c in members:
+                head = f"  {mark[c['outcome']]:<5} {c['id']:<11} {c['level']:<6} "
+                out.append(head + one_line(c["title"], width - len(head)))
+                if c["outcome"] == Outcome.KNOWN_DEVIATION.value and c["expectation"]:
+                    out.append("        excused: " + one_line(c["expectation"], width - 17))
+    for group in order.groups:
+        out.append(one_line(group_title(group), width))
+        out += textwrap.wrap(", ".join(c["id"] for c in group.clauses), width,
+                             initial_indent="  ", subsequent_indent="  ")
+    return out
+
+
 def _summary(doc: dict[str, Any], report_dir: str) -> None:
     from mavconform.reports.run_document import run_facts
     from mavconform.reports.text import dropped_text, flight_endings, identity_text, link_text, safety_alarm
@@ -239,6 +264,8 @@ def _summary(doc: dict[str, Any], report_dir: str) -> None:
     for name in ("pass", "fail", "known-deviation", "not-applicable", "skipped", "error"):
         print(f"  {name:<16} {s[name]:>7}")
     print(f"  {'total':<16} {s['total']:>7}")
+    for line in reading_lines(doc):
+        print(line)
     gating = doc["gating"]
     if gating["mode"] == "baseline":
         print(f"baseline: {len(gating['regressions'])} regression(s)"

@@ -1,10 +1,12 @@
 """The HTML report: one self-contained file to attach to a CI run or mail to a vendor.
 
 Inline CSS, inline SVG, no scripts and no external assets, so it opens anywhere, offline,
-years later. What a reader opens it for comes first: right under the verdict, "What failed"
-lists every clause that did not pass (those that fail the run first), each with its
-requirement, its verdict and its exchange, the deciding message highlighted; the run's facts
-and the full matrix follow. The "only not passing" filter is CSS (`:has`); where that is
+years later. What a reader opens it for comes first, in reports/reading_order.py's order:
+right under the verdict, what fails the run (a red box only when something does), each
+clause with its requirement, its verdict and its exchange, the deciding message highlighted;
+then the known deviations, each with what excuses it (folded); then what else did not pass;
+then the not-applicable and skipped clauses, one folded line per reason. The run's facts and
+the full matrix follow. The "only not passing" filter is CSS (`:has`); where that is
 unsupported the page simply shows everything. Every string from the document goes through
 `html.escape`: details and fields come from a target on the wire and may contain anything.
 Times and durations are read through run_document's accessors, wherever the document keeps them.
@@ -23,6 +25,7 @@ from mavconform.conformance.fidelity.table import unlike
 from mavconform.reports import run_document as rd
 from mavconform.reports.deciding import deciding_event, recorded_event
 from mavconform.reports.fidelity_html import fidelity_sections
+from mavconform.reports.reading_order import group_title, reading_order
 from mavconform.reports.run_document import OUTCOMES, PASS, outcome_counts
 from mavconform.reports.sequence_svg import sequence_diagram
 from mavconform.reports.text import (clean, dropped_text, flight_endings, identity_text, interruption, link_text,
@@ -57,6 +60,12 @@ code, .id { font-family: ui-monospace, monospace; }
 section#what-failed { border: 2px solid #cf222e; border-radius: 6px; padding: 0 1em 1em;
                       margin: 1em 0 2em; }
 section#what-failed.none { border-color: #1a7f37; }
+section#deviations { border: 2px solid #d4a72c; border-radius: 6px; padding: 0 1em 1em; margin: 1em 0 2em; }
+section#not-gating { border: 1px solid #d0d7de; border-radius: 6px; padding: 0 1em 1em; margin: 1em 0 2em; }
+details.fold { margin: .3em 0; } details.fold > summary { cursor: pointer; }
+details.fold > summary .why { color: #57606a; font-size: .9em; display: block; margin-left: 1.5em; }
+details.group > summary { color: #57606a; }
+p.members { font-size: .9em; }
 ol.failed-index { padding-left: 1.5em; } ol.failed-index li { margin: .2em 0; }
 ol.failed-index .why { color: #57606a; font-size: .9em; display: block; }
 h3.part { margin-top: 1.5em; color: #57606a; }
@@ -142,12 +151,8 @@ def _why_verdict(doc: dict[str, Any]) -> str:
 
 
 def not_passing(clauses: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The clauses "What failed" shows, in its order: those failing the run, then the rest
-    that did not pass (SHOULD failures, known deviations, ...); within each, by outcome
-    (fail, known-deviation, not-applicable, skipped, error), then in run order."""
-    rank = {outcome: i for i, outcome in enumerate(OUTCOMES)}   # fail before error
-    return sorted((c for c in clauses if c["gating"] or c["outcome"] != PASS),
-                  key=lambda c: (not c["gating"], rank[c["outcome"]]))
+    """The clauses listed above the run's facts, in reading order (reports/reading_order.py)."""
+    return reading_order({"clauses": clauses, "volatile": {}}).listed
 
 
 def _tally(clauses: list[dict[str, Any]]) -> str:
@@ -156,34 +161,68 @@ def _tally(clauses: list[dict[str, Any]]) -> str:
 
 
 def _what_failed(doc: dict[str, Any], interrupted: bool) -> list[str]:
-    shown = not_passing(doc["clauses"])
-    gating = [c for c in shown if c["gating"]]
-    rest = shown[len(gating):]
-    if not shown:
+    """What fails the run (red, only if anything does), the known deviations, what else did
+    not pass, and the not-applicable and skipped clauses folded in groups by reason."""
+    order = reading_order(doc)
+    if order.failing:
+        n = len(order.failing)
+        out = ['<section id="what-failed">', f"<h2>Fails the run ({n})</h2>",
+               f"<p>{_clauses(n)} fail{'s' if n == 1 else ''} the run.</p>", *_index(doc, order.failing)]
+        for clause in order.failing:
+            out += _finding(doc, clause)
+        out.append("</section>")
+    else:
         said = ("Nothing failed before the run was interrupted." if interrupted
-                else "Every clause passed.")
-        return ['<section id="what-failed" class="none">', "<h2>What failed</h2>",
-                f"<p>{said}</p>", "</section>"]
-    said = [f"{_clauses(len(gating))} fail{'s' if len(gating) == 1 else ''} the run"
-            if gating else "No clause fails the run"]
-    if rest:
-        said.append(f"{_clauses(len(rest), 'more ' if gating else '')} did not pass but "
-                    f"do{'es' if len(rest) == 1 else ''} not fail it")
-    out = ['<section id="what-failed">', f"<h2>What failed ({len(shown)})</h2>",
-           f"<p>{'; '.join(said)}.</p>", '<ol class="failed-index">']
-    for clause in shown:
+                else "Every clause passed." if not order.listed
+                else "No clause fails the run; what did not pass is below, each with why it does not.")
+        out = ['<section id="what-failed" class="none">', "<h2>Nothing fails the run</h2>",
+               f"<p>{said}</p>", "</section>"]
+    if order.deviations:
+        n = len(order.deviations)
+        out += ['<section id="deviations">', f"<h2>Known deviations ({n})</h2>",
+                f"<p>{_clauses(n)} behaved as the expectations file says this target does; each "
+                "names what excuses it. Open one for its requirement and exchange.</p>"]
+        for clause in order.deviations:
+            excuse = clean(clause["expectation"]) if clause["expectation"] else "no reason given"
+            out.append(f'<details class="fold"><summary>{_badge(clause["outcome"])} '
+                       f'<span class="id">{escape(one_line(clause["id"]))}</span> {escape(clause["level"])} '
+                       f'{escape(one_line(clause["title"]))}<span class="why">excused: {escape(excuse)}</span>'
+                       "</summary>")
+            out += _finding(doc, clause)
+            out.append("</details>")
+        out.append("</section>")
+    if order.other:
+        n = len(order.other)
+        out += ['<section id="not-gating">', f"<h2>Did not pass, does not fail the run ({n})</h2>",
+                *_index(doc, order.other)]
+        for clause in order.other:
+            out += _finding(doc, clause)
+        out.append("</section>")
+    if order.groups:
+        n = sum(len(g.clauses) for g in order.groups)
+        out += ['<section id="not-applicable">', f"<h2>Not applicable or skipped ({n})</h2>"]
+        for group in order.groups:
+            out.append(f'<details class="fold group"><summary>{_badge(group.outcome)} '
+                       f"{escape(clean(group_title(group)))}</summary>")
+            out.append('<p class="members">' + ", ".join(
+                f'<a class="id" href="#{_anchor(c)}">{escape(one_line(c["id"]))}</a>' for c in group.clauses) + "</p>")
+            for clause in group.clauses:
+                out += _finding(doc, clause)
+            out.append("</details>")
+        out.append("</section>")
+    return out
+
+
+def _index(doc: dict[str, Any], clauses: list[dict[str, Any]]) -> list[str]:
+    """One line per clause, linking to its section: badge, id, level, title and the verdict."""
+    out = ['<ol class="failed-index">']
+    for clause in clauses:
         why = one_line(rd.clause_detail(doc, clause), INDEX_DETAIL_CHARS)
         out.append(f'<li>{_badge(clause["outcome"])} <a class="id" href="#{_anchor(clause)}">'
                    f'{escape(one_line(clause["id"]))}</a> {escape(clause["level"])} '
                    f'{escape(one_line(clause["title"]))}'
                    + (f'<span class="why">{escape(why)}</span>' if why else "") + "</li>")
     out.append("</ol>")
-    for part, members in (("Fails the run", gating), ("Did not pass, does not fail the run", rest)):
-        if members:
-            out.append(f'<h3 class="part">{part} ({len(members)})</h3>')
-            for clause in members:
-                out += _finding(doc, clause)
-    out.append("</section>")
     return out
 
 
@@ -226,7 +265,10 @@ def _fact_rows(doc: dict[str, Any]) -> list[tuple[str, str]]:
     if volatile.get("duration_s") is not None:
         facts.append(("duration", seconds(volatile["duration_s"])))
     if volatile.get("forced_wait_s") is not None:
-        facts.append(("forced waits", seconds(volatile["forced_wait_s"])))
+        speed = (run.get("link") or {}).get("clock_speed")
+        forced = seconds(volatile["forced_wait_s"])
+        facts.append(("forced waits", forced if not speed else
+                      f"{forced} of the {speed:g}x clock ({seconds(volatile['forced_wait_s'] / speed)} real)"))
     if link_text(doc) is not None:
         facts.append(("link", link_text(doc)))
     if dropped_text(doc) is not None:

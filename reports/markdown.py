@@ -1,7 +1,9 @@
 """Markdown summary, sized for a GitHub job summary or a pull-request comment.
 
-Verdict first (for an interrupted run, that it was cut short), then what did not pass, since
-that is what a reviewer acts on; the full clause matrix is folded away in <details>. GitHub
+Verdict first (for an interrupted run, that it was cut short), then what a reviewer acts on,
+in reports/reading_order.py's order: what fails the run, the known deviations with what
+excuses each, what else did not pass, and the not-applicable and skipped clauses as one
+folded line per reason; the full clause matrix is folded away in <details>. GitHub
 renders inline HTML, so text from the target is escaped for Markdown *and* HTML: it cannot
 open a tag, break a table or a line.
 """
@@ -13,8 +15,8 @@ from typing import Any
 from urllib.parse import quote
 
 from mavconform.conformance.fidelity.table import markdown as survey_markdown
-from mavconform.reports.run_document import (OUTCOMES, PASS, clause_detail, outcome_counts,
-                                             run_facts)
+from mavconform.reports.reading_order import group_title, reading_order
+from mavconform.reports.run_document import clause_detail, outcome_counts, run_facts
 from mavconform.reports.text import (document_identity, dropped_text, flight_endings, interruption, link_text,
                                      one_line, safety_alarm, seconds, verdict_headline)
 
@@ -31,6 +33,36 @@ _SPECIAL = re.compile(r"([\\`*_\[\]<>|&~#!])")
 def md(text: str, limit: int | None = None) -> str:
     """`text` as literal Markdown on one line: safe in a table cell or a heading."""
     return _SPECIAL.sub(r"\\\1", one_line(text, limit))
+
+
+def _reading_order(doc: dict[str, Any]) -> list[str]:
+    """What fails the run, the known deviations (with what excuses each), what else did not
+    pass, then the not-applicable and skipped clauses folded by reason (reading_order.py)."""
+    order, out = reading_order(doc), []
+    head = ["| Clause | Level | Outcome | Title | Detail |", "|---|---|---|---|---|"]
+    if order.failing:
+        out += ["", f"### Fails the run ({len(order.failing)})", "", *head]
+        out += [_row(doc, c) for c in order.failing]
+    if order.deviations:
+        out += ["", f"### Known deviations ({len(order.deviations)})", "",
+                "| Clause | Level | Title | Excused by | Detail |", "|---|---|---|---|---|"]
+        out += [f"| {md(c['id'])} | {md(c['level'])} | {md(c['title'])} | "
+                f"{md(c['expectation'] or 'no reason given', DETAIL_LIMIT)} | "
+                f"{md(clause_detail(doc, c), DETAIL_LIMIT)} |" for c in order.deviations]
+    if order.other:
+        out += ["", f"### Did not pass, does not fail the run ({len(order.other)})", "", *head]
+        out += [_row(doc, c) for c in order.other]
+    for group in order.groups:
+        out += ["", f"<details><summary>{OUTCOME_ICONS[group.outcome]} {md(group_title(group), DETAIL_LIMIT)}"
+                    "</summary>", "", ", ".join(md(c["id"]) for c in group.clauses), "", "</details>"]
+    return out
+
+
+def _row(doc: dict[str, Any], clause: dict[str, Any]) -> str:
+    gating = " (gating)" if clause["gating"] else ""
+    return (f"| {md(clause['id'])} | {md(clause['level'])} | "
+            f"{OUTCOME_ICONS[clause['outcome']]} {clause['outcome']}{gating} | "
+            f"{md(clause['title'])} | {md(clause_detail(doc, clause), DETAIL_LIMIT)} |")
 
 
 def markdown_summary(doc: dict[str, Any]) -> str:
@@ -74,15 +106,7 @@ def markdown_summary(doc: dict[str, Any]) -> str:
         out.append(f"| {OUTCOME_ICONS[outcome]} {outcome} | {count} |")
     out.append(f"| **total** | **{len(clauses)}** |")
 
-    not_passing = [c for c in clauses if c["outcome"] != PASS]
-    if not_passing:
-        out += ["", f"### Not passing ({len(not_passing)})", "",
-                "| Clause | Level | Outcome | Title | Detail |", "|---|---|---|---|---|"]
-        for clause in sorted(not_passing, key=lambda c: OUTCOMES.index(c["outcome"])):
-            gating = " (gating)" if clause["gating"] else ""
-            out.append(f"| {md(clause['id'])} | {md(clause['level'])} | "
-                       f"{OUTCOME_ICONS[clause['outcome']]} {clause['outcome']}{gating} | "
-                       f"{md(clause['title'])} | {md(clause_detail(doc, clause), DETAIL_LIMIT)} |")
+    out += _reading_order(doc)
 
     gating = doc["gating"]
     titles = {c["id"]: c["title"] for c in clauses}
