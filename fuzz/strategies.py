@@ -48,6 +48,7 @@ alt = st.floats(-500, 10_000, width=32)
 GLOBAL = st.sampled_from([0, 3, 5, 6, 10, 11])
 
 
+@cached_strategy_builder   # drawn inside composites, for every item: built once, not per draw
 @st.composite
 def mission_item(draw, mission_type: MissionType) -> MissionItem:
     """An item of `mission_type` the spec vehicle accepts (seq 0: the upload renumbers)."""
@@ -178,6 +179,7 @@ _COMMANDS_BY_TYPE = {MissionType.MISSION: MISSION_COMMANDS, MissionType.FENCE: F
 unknown_command = edge_u16.filter(lambda c: c not in KNOWN_COMMANDS)
 
 
+@cached_strategy_builder
 def commands(mission_type: MissionType) -> st.SearchStrategy[int]:
     """Commands of the plan type, of another plan type, and unknown ones."""
     own = sorted(int(c) for c in _COMMANDS_BY_TYPE[mission_type])
@@ -202,10 +204,44 @@ def item_fields(item: MissionItem) -> dict[str, Any]:
     return {name: getattr(item, name) for name in ITEM_FIELDS}
 
 
+@cached_strategy_builder
 def valid_wire_item(mission_type: MissionType) -> st.SearchStrategy[dict[str, Any]]:
     return mission_item(mission_type).map(item_fields)
 
 
+TEMPLATES = 2   # items of a plan drawn field by field; the rest of the plan copies them
+_GLOBAL_ORDER = sorted(GLOBAL_FRAMES)   # the frames a copy of a positional item steps through
+_STEP_X = 97    # degE7 a copy moves per index: no two items of a plan alike
+
+
+@st.composite
+def valid_wire_items(draw, mission_type: MissionType, min_size: int = 0,
+                     max_size: int = 20) -> list[dict[str, Any]]:
+    """A plan of items the spec vehicle accepts, for the price of a few: up to TEMPLATES
+    items are drawn in full (and shrink), and the rest copy them in turn, each moved along
+    x by its index (so no copy equals its template or another copy of it: one returned in
+    another's place shows) and, if its frame is a global one, put in the template's next
+    global frame, copy by copy (so a long plan carries every frame though only a few items
+    were drawn). Drawn field by field, a 50-item plan cost the protocol
+    fuzzer more than everything the vehicle and the oracles did with it
+    (bench/protocol_fuzz.py)."""
+    # the plan's length as a list of its size draws it (no item drawn): the same lengths,
+    # empty plans as often, shrinking by dropping items
+    n = len(draw(st.lists(st.just(None), min_size=min_size, max_size=max_size)))
+    templates = [draw(valid_wire_item(mission_type)) for _ in range(min(n, TEMPLATES))]
+    items = list(templates)
+    for i in range(len(templates), n):
+        item = dict(templates[i % len(templates)])
+        shift = _STEP_X * i
+        item["x"] = item["x"] + shift if item["x"] + shift <= 900_000_000 else item["x"] - shift
+        if item["frame"] in GLOBAL_FRAMES:
+            turn = i // len(templates)
+            item["frame"] = _GLOBAL_ORDER[(_GLOBAL_ORDER.index(item["frame"]) + turn) % len(_GLOBAL_ORDER)]
+        items.append(item)
+    return items
+
+
+@cached_strategy_builder
 @st.composite
 def edge_wire_item(draw, mission_type: MissionType) -> dict[str, Any]:
     """A valid item with one to three fields replaced by edge values."""
@@ -268,6 +304,7 @@ def float_xy(kind: str, axis: str) -> st.SearchStrategy[float]:
                      st.one_of(st.sampled_from(F32_EDGES), subnormal_f32))
 
 
+@cached_strategy_builder
 @st.composite
 def float_wire_item(draw, mission_type: MissionType) -> dict[str, Any]:
     """A wire item for a float upload (MISSION_ITEM) with its float32 fields pushed out of
@@ -289,6 +326,7 @@ def float_wire_item(draw, mission_type: MissionType) -> dict[str, Any]:
     return fields
 
 
+@cached_strategy_builder
 @st.composite
 def float_overrides(draw, kind: str) -> dict[str, float]:
     """What a `float_wire_item` of `kind` carries instead of its own floats: "fx" and/or
@@ -322,7 +360,7 @@ def wire_plan(draw, mission_type: MissionType, max_size: int = 20, *,
     shrinks) edge items spliced in or one item whose `seq` or `mission_type` is wrong on the
     wire. An item's "seq" or "mission_type" key, when present, is what goes out instead of
     the transfer's own. `edges=False`: only items the spec vehicle accepts."""
-    items = draw(st.lists(valid_wire_item(mission_type), min_size=min_size, max_size=max_size))
+    items = draw(valid_wire_items(mission_type, min_size, max_size))
     if not items or not edges:
         return items
     last = len(items) - 1

@@ -91,7 +91,10 @@ class StoredForm:
         if len(got) != len(want):
             return False
         canonical, compared = self.canonical, self._compared
-        return all(canonical(g, stored=True) == canonical(w, stored=want_stored)
+        # an item equal to the one sent has the same canonical form whenever both sides go
+        # through the same storage (the fuzzers compare thousands of plans: most are equal)
+        alike = want_stored or self.storage == "exact"
+        return all((alike and g == w) or canonical(g, stored=True) == canonical(w, stored=want_stored)
                    for g, w in zip(got, want) if compared(w))
 
     def differences(self, got: Sequence[MissionItem], want: Sequence[MissionItem], *,

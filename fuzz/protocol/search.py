@@ -79,8 +79,12 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
            stop_after: float | None = None, database: ExampleDatabase | None = None,
            on_example: Callable[[int], None] | None = None,
            knobs: Knobs | None = None, profile: str | None = None,
-           capture: CaptureHook | None = None, handover: bool | None = None) -> list[Case]:
+           capture: CaptureHook | None = None, handover: bool | None = None,
+           on_finding: Callable[[Finding], None] | None = None) -> list[Case]:
     """Run the protocol state machine against `target`; return the shrunk findings.
+    `on_finding` is told of each failing example as Hypothesis meets it, before shrinking
+    (bench/protocol_fuzz.py --find-planted times how soon the first comes; a KeyboardInterrupt
+    from it ends the campaign there, as one from the user does: `SearchInterrupted`).
     `profile` (UDP targets) names the vehicle profile whose rules the oracles apply;
     `capture` sees the live traffic of a UDP campaign (the campaign keeps the last of it);
     `handover` (else the knobs') turns operator control on: the control steps and invariants.
@@ -104,7 +108,7 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
     try:
         if knobs.handover and state.connection is not None:
             _require_control_status(state.connection)
-        return _search(knobs, seed, max_examples, deadline, database, on_example, state)
+        return _search(knobs, seed, max_examples, deadline, database, on_example, state, on_finding)
     finally:
         if state.connection is not None:
             state.connection.close()
@@ -112,7 +116,7 @@ def search(target: str, *, seed: int, max_examples: int | None = None,
 
 def _search(knobs: Knobs, seed: int, max_examples: int | None, deadline: float | None,
             database: ExampleDatabase | None, on_example: Callable[[int], None] | None,
-            state: CampaignState) -> list[Case]:
+            state: CampaignState, on_finding: Callable[[Finding], None] | None = None) -> list[Case]:
     done = 0
     chunk = 0
     rate = 0.0   # examples per second so far, to size the next chunk
@@ -125,6 +129,8 @@ def _search(knobs: Knobs, seed: int, max_examples: int | None, deadline: float |
             on_example(units)
 
     def saw(found: Finding) -> None:
+        if on_finding is not None:
+            on_finding(found)
         old = seen.get(found.violation.invariant)
         if old is None or len(found.steps) < len(old.steps):
             seen[found.violation.invariant] = found

@@ -65,6 +65,21 @@ def test_wire_items_carry_a_nan_param_unknown_commands_frames_and_flags():
     assert first_defect(it) is not None
 
 
+@settings(max_examples=60, suppress_health_check=list(HealthCheck))
+@given(t=st.sampled_from(list(T)[:3]), data=st.data())
+def test_a_long_valid_plan_is_drawn_from_a_few_items_yet_every_item_is_valid_and_its_own(t, data):
+    """Issue 27: a 50-item plan costs the draws of TEMPLATES items; its copies stay items the
+    spec vehicle accepts, no two alike, and step through every global frame."""
+    plan = data.draw(fs.valid_wire_items(t, 50, 50))
+    items, _ = wire_to_items(plan, t)
+    assert len(items) == 50 and all(first_defect(it) is None for it in items)
+    for k in range(fs.TEMPLATES):   # the copies of one template: each its own, every global frame
+        copies = plan[k::fs.TEMPLATES]
+        assert len({d["x"] for d in copies}) == len(copies)
+        if copies[0]["frame"] in GLOBAL_FRAMES:
+            assert {d["frame"] for d in copies} == set(GLOBAL_FRAMES)
+
+
 def test_wire_plans_have_seq_gaps_repeats_and_foreign_mission_types():
     plan = fs.wire_plan(T.MISSION, max_size=10)
     gap = _find(plan, lambda p: any(d.get("seq", i) > i for i, d in enumerate(p)))
