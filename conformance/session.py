@@ -30,7 +30,7 @@ from mavconform.reference_impl.vehicle import VehicleConfig, VehicleNode
 
 from .harness.link_timing import link_facts, stream_events
 from .harness.tester import Tester, record_traffic
-from .harness.stored_form import form_for_target, form_of_behaviour
+from .harness.stored_form import modelling_profile, stored_form_of
 from .harness.tester_node import TesterNode
 from .outcome import TargetUnresponsive
 from .target_uri import TargetUri
@@ -189,9 +189,9 @@ class Session:
             self.target_address = node.endpoint.peers.get(node.target)
         self.t.target = node.target
         msg = frame.msg
-        self.t.form = (form_of_behaviour(self.vehicle.config.behaviour, f"builtin:{self.uri.name}")
-                       if self.vehicle is not None else self._profile_form()
-                       or form_for_target(msg.autopilot, msg.type))
+        self.t.form = stored_form_of(modelling_profile(
+            str(self.uri), vehicle_config=self.vehicle.config if self.vehicle is not None else None,
+            mutant=self.uri.kind == "mutant", chosen=self.uri.profile, autopilot=msg.autopilot, mav_type=msg.type))
         self.identity = {
             "system": frame.src_system, "component": frame.src_component, "type": msg.type,
             "autopilot": msg.autopilot, "mavlink_version": frame.version,
@@ -209,14 +209,6 @@ class Session:
             return False
         from mavconform.reference_impl.profiles import load_profile
         return load_profile(self.uri.profile).int_messages_ignored
-
-    def _profile_form(self) -> Any:
-        """The stored form `--profile` says the external target keeps, or None."""
-        if self.uri.profile is None:
-            return None
-        from mavconform.reference_impl.profiles import load_profile
-        profile = load_profile(self.uri.profile)
-        return form_of_behaviour(profile.behaviour, f"--profile {self.uri.profile}: the {profile.name} profile")
 
     def record_flight(self, style: str, plan: str, ending: Any) -> None:
         """Keep how a flight ended (a `landing.Ending`) for the run report."""

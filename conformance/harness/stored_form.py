@@ -151,15 +151,33 @@ def profile_for_target(autopilot: int | None, mav_type: int | None = None) -> st
     return ours[0][0] if ours else None
 
 
-def form_for_target(autopilot: int | None, mav_type: int | None = None) -> StoredForm:
-    """The stored form of an external target, from its HEARTBEAT: the builtin profile for
-    that autopilot and vehicle class holds the facts (one place), the spec otherwise."""
+def modelling_profile(label: str, *, vehicle_config: Any = None, mutant: bool = False,
+                      chosen: str | None = None, autopilot: int | None = None,
+                      mav_type: int | None = None) -> tuple[Any, str] | None:
+    """The vehicle profile a target is held to (a `VehicleConfig`) and why; None: the spec.
+    One choice for every consumer (the suite's session, the frame fuzzer's rig, the protocol
+    fuzzer's world): a mutant claims to be the spec vehicle; an in-process vehicle (`label`
+    names it) is held to its own profile; an external one to the profile --profile names,
+    else to the builtin profile of the autopilot and vehicle class its HEARTBEAT names, else
+    to the spec."""
+    if mutant:
+        return None
+    if vehicle_config is not None:
+        return vehicle_config, f"the {label} profile"
+    from mavconform.reference_impl.profiles import load_profile
+    if chosen is not None:
+        profile = load_profile(chosen)
+        return profile.config, f"--profile {chosen}: the {profile.name} profile"
     name = profile_for_target(autopilot, mav_type)
     if name is None:
-        return SPEC_FORM
-    from mavconform.reference_impl.profiles import load_profile
-    return form_of_behaviour(load_profile(name).behaviour,
-                             f"HEARTBEAT autopilot {autopilot}, {type_name(mav_type)}: the {name} profile")
+        return None
+    return (load_profile(name).config,
+            f"HEARTBEAT autopilot {autopilot}, {type_name(mav_type)}: the {name} profile")
+
+
+def stored_form_of(model: tuple[Any, str] | None) -> StoredForm:
+    """The stored form of a `modelling_profile` (the spec's for None)."""
+    return SPEC_FORM if model is None else form_of_behaviour(model[0].behaviour, model[1])
 
 
 def _vehicle_type(config: Any) -> int:

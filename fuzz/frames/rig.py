@@ -40,7 +40,7 @@ from typing import Any
 
 from mavconform.conformance.harness import plans
 from mavconform.conformance.harness.stored_form import (SPEC_FORM, StoredForm, describe_differences,
-                                             form_for_target, form_of_behaviour)
+                                             modelling_profile, stored_form_of)
 from mavconform.conformance.session import build_vehicle
 from mavconform.conformance.target_uri import TargetUri
 from mavconform.fuzz.case import Violation
@@ -270,18 +270,16 @@ class Rig:
             return Violation("target-crash", f"no HEARTBEAT from {self.uri} within "
                              f"{DISCOVERY_WAIT * self.scale:g} s, before any fuzz frame was sent")
         self._target = self.gcs.target
-        inert = INERT
-        if self.vehicle is not None:
-            self.form = form_of_behaviour(self.vehicle.config.behaviour, str(self.uri))
-            inert = inert_messages(self.vehicle.config)
-        elif self.profile is not None:
-            from mavconform.reference_impl.profiles import load_profile
-            profile = load_profile(self.profile)
-            self.form = form_of_behaviour(profile.behaviour, f"profile {self.profile} (--profile)")
-            inert = inert_messages(profile.config)
-        else:
-            heartbeat = self.gcs.target_heartbeat
-            self.form = form_for_target(getattr(heartbeat, "autopilot", None), getattr(heartbeat, "type", None))
+        heartbeat = self.gcs.target_heartbeat
+        model = modelling_profile(str(self.uri), vehicle_config=self.vehicle.config if self.vehicle else None,
+                                  mutant=self.uri.kind == "mutant", chosen=self.profile,
+                                  autopilot=getattr(heartbeat, "autopilot", None),
+                                  mav_type=getattr(heartbeat, "type", None))
+        self.form = stored_form_of(model)
+        # what the target reads: an in-process vehicle's or --profile's (a HEARTBEAT's guess
+        # is not enough to leave messages out of the fuzz)
+        known = self.vehicle.config if self.vehicle is not None else (model[0] if self.profile and model else None)
+        inert = inert_messages(known) if known is not None else INERT
         admission = Admission(self.key, self.key is not None, self._ctx.wall_clock, inert=inert)
         self.builder = Builder(self._target, self._ctx, admission, sign_frames=self.key is not None)
         station.admission = admission        # from now on every datagram to the target is fed to it

@@ -37,7 +37,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
-from mavconform.conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, profile_for_target
+from mavconform.conformance.harness.stored_form import SPEC_FORM, StoredForm, form_of_behaviour, modelling_profile
 from mavconform.conformance.session import build_vehicle
 from mavconform.conformance.target_uri import TargetUri, parse_target
 from mavconform.reference_impl.errors import UsageError
@@ -91,19 +91,13 @@ def profile_from(name_or_file: str, basis: str) -> Profile:
 
 def profile_for(uri: TargetUri, vehicle: VehicleNode | None, *, chosen: str | None = None,
                 autopilot: int | None = None, mav_type: int | None = None) -> Profile:
-    """In-process targets are held to their own profile's rules (a mutant claims to be the
-    spec vehicle); a UDP target to the profile given with --profile, else to the builtin
-    profile of the autopilot and vehicle type its HEARTBEAT names, else to the spec."""
-    if uri.kind == "mutant":
-        return Profile()
-    if vehicle is not None:
-        return rules_of(vehicle.config, f"the {uri} profile")
-    if chosen is not None:
-        return profile_from(chosen, f"profile {chosen} (--profile)")
-    name = profile_for_target(autopilot, mav_type)
-    if name is not None:
-        return profile_from(name, f"the {name} profile (HEARTBEAT autopilot {autopilot}, MAV_TYPE {mav_type})")
-    return Profile()
+    """The oracle rules of the profile the target is held to (stored_form.modelling_profile,
+    the one choice every consumer makes): a mutant's are the spec's (it claims to be the spec
+    vehicle), an in-process vehicle's its own, a UDP target's those of --profile, else of the
+    builtin profile its HEARTBEAT names, else the spec's."""
+    model = modelling_profile(str(uri), vehicle_config=vehicle.config if vehicle is not None else None,
+                              mutant=uri.kind == "mutant", chosen=chosen, autopilot=autopilot, mav_type=mav_type)
+    return Profile() if model is None else rules_of(*model)
 
 
 class World:

@@ -358,6 +358,10 @@ def test_a_generic_autopilot_is_not_taken_for_inav():
     """INAV's HEARTBEAT says MAV_AUTOPILOT_GENERIC, as MAVSDK's server and most others do: the
     profile is named with --profile, never guessed from autopilot 0 (it gave MAVSDK INAV's
     float32 stored form and eight false failures)."""
-    from mavconform.conformance.harness.stored_form import SPEC_FORM, form_for_target, profile_for_target
+    from mavconform.conformance.harness.stored_form import (SPEC_FORM, modelling_profile, profile_for_target,
+                                                           stored_form_of)
     assert load_profile("inav").config.autopilot == 0
-    assert profile_for_target(0, 2) is None and form_for_target(0, 2) == SPEC_FORM
+    assert profile_for_target(0, 2) is None
+    assert stored_form_of(modelling_profile("udp:127.0.0.1:14550", autopilot=0, mav_type=2)) == SPEC_FORM
+    chosen = modelling_profile("udp:127.0.0.1:14550", chosen="inav", autopilot=0, mav_type=2)
+    assert chosen is not None and stored_form_of(chosen).storage == load_profile("inav").behaviour.item_storage
