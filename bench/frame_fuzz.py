@@ -75,7 +75,8 @@ def one_run(target: str, args: argparse.Namespace, profile: str | None = None) -
     rate = campaign.frames_sent / wall
     print(f"frame fuzz vs {target} over UDP loopback, {wall:.1f} s, seed {args.seed}")
     print(f"  examples                {campaign.examples}")
-    print(f"  frames sent             {campaign.frames_sent}  ({rate:,.0f}/s; goal >= 20,000/s)")
+    goal = "; goal >= 20,000/s" if target == "builtin:spec" else ""
+    print(f"  frames sent             {campaign.frames_sent}  ({rate:,.0f}/s{goal})")
     print(f"  frames checked (passed) {campaign.passed_frames}  ({campaign.passed_frames / wall:,.0f}/s)")
     if rig.counted is not None:   # our own vehicle: how many of them it read
         print(f"  datagrams sent / read   {rig.datagrams_sent} / {rig.counted.received - _oracle_datagrams(rig)}"
