@@ -7,10 +7,16 @@ BIN    := $(VENV)/bin
 
 setup: $(VENV)/.installed
 
+# setuptools announces every editable install of a mapped layout like ours with a warning
+# ("Editable installation. Please be careful with folders ... the same name as your package"):
+# information, not a fault, and it made a fresh clone's first screen look broken (issue 29).
+# tests/test_packaging.py runs this command and fails on any warning it prints.
+QUIET_EDITABLE = PYTHONWARNINGS="ignore:Editable install"
+
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e .
+	$(QUIET_EDITABLE) $(BIN)/python -m pip install --quiet -e .
 	touch $@
 
 test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores), spread over the cores
@@ -35,7 +41,7 @@ MAVSDK_SKIP := MIS.UP.16
 MAVSDK_OUT  := reports/mavsdk
 
 $(VENV)/.interop-installed: $(VENV)/.installed
-	$(BIN)/python -m pip install --quiet -e '.[interop]'
+	$(QUIET_EDITABLE) $(BIN)/python -m pip install --quiet -e '.[interop]'
 	touch $@
 
 setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk wheel, yamspy) on top of setup

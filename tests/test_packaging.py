@@ -6,6 +6,8 @@ every user project with a package of the same name (pytest could not load our pl
 
 from __future__ import annotations
 
+import os
+import re
 import shutil
 import subprocess
 import sys
@@ -84,6 +86,28 @@ def test_the_wheel_builds_without_a_warning(wheel: Path) -> None:
     first run; the data folders are now packages of their own with their files as package data."""
     said = BUILD_OUTPUT[wheel]
     assert "Warning" not in said and "would be ignored" not in said, said[:2000]
+
+
+def test_the_editable_install_make_runs_prints_no_warning(tmp_path: Path) -> None:
+    """Issue 29: `make run`'s set-up (the Makefile's own pip command, with its warning filter)
+    prints nothing but pip's progress: setuptools' editable-install notice read as a fault."""
+    makefile = (ROOT / "Makefile").read_text()
+    quiet = re.search(r'^QUIET_EDITABLE = (\w+)="([^"]*)"$', makefile, re.M)
+    assert quiet and "$(QUIET_EDITABLE) $(BIN)/python -m pip install --quiet -e ." in makefile
+    source = tmp_path / "source"
+    source.mkdir()
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, source / name)
+    for top in ("mavconform", *MAPPED):
+        shutil.copytree(ROOT / top, source / top, ignore=_not_sources)
+    venv.create(tmp_path / "venv", with_pip=False)
+    env = {**os.environ, quiet.group(1): quiet.group(2)}
+    done = subprocess.run([sys.executable, "-m", "pip", "--python", str(tmp_path / "venv" / "bin" / "python"),
+                           "install", "--quiet", "--no-deps", "-e", str(source)],
+                          capture_output=True, text=True, timeout=300, env=env)
+    said = done.stdout + done.stderr
+    assert done.returncode == 0, said[:2000]
+    assert "Warning" not in said and "Editable installation" not in said, said[:2000]
 
 
 def test_every_data_file_the_code_reads_is_in_the_wheel(wheel: Path) -> None:
