@@ -226,8 +226,9 @@ def valid_wire_items(draw, mission_type: MissionType, min_size: int = 0,
     fuzzer more than everything the vehicle and the oracles did with it
     (bench/protocol_fuzz.py)."""
     # the plan's length as a list of its size draws it (no item drawn): the same lengths,
-    # empty plans as often, shrinking by dropping items
-    n = len(draw(st.lists(st.just(None), min_size=min_size, max_size=max_size)))
+    # empty plans as often, shrinking by dropping items; a fixed size draws nothing
+    n = min_size if min_size == max_size else len(draw(st.lists(st.just(None), min_size=min_size,
+                                                                  max_size=max_size)))
     templates = [draw(valid_wire_item(mission_type)) for _ in range(min(n, TEMPLATES))]
     items = list(templates)
     for i in range(len(templates), n):
