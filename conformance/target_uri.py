@@ -107,7 +107,7 @@ def load_handover_scenario(text: str, option: str = "--handover-scenario") -> Sc
         scenario = load_scenario(scenario_path(text))
     except UsageError as exc:
         raise UsageError(f"{option}: {exc}") from None
-    from .checks.handover_sequence import route_of   # the clauses say what they can fly
+    from .checks.handover_route import route_of   # the clauses say what they can fly
     route_of(scenario, option=f"{option} {text}")
     return scenario
 

@@ -14,7 +14,7 @@ import pytest
 
 from mavconform.cli import main
 from mavconform.conformance import catalogue
-from mavconform.conformance.checks.handover_sequence import route_of
+from mavconform.conformance.checks.handover_route import route_of
 from mavconform.conformance.harness import procedures
 from mavconform.conformance.mutants import MUTANTS
 from mavconform.conformance.outcome import Outcome
