@@ -119,7 +119,7 @@ def test_the_command_writes_both_matrices(tmp_path, capsys) -> None:
     md = (tmp_path / "run.md").read_text()
     assert "### Frames × plan types (110 cells)" in md and "### Commands × params" in md
     assert "Refused UNSUPPORTED as such (70): " in md and "18 NAV_LOITER_TURNS, " in md
-    assert "- rule px4 storage: px4 item storage of the profile (px4 item storage (builtin:px4))" in md
+    assert "- rule px4 storage: px4 item storage of the profile (px4 item storage (the builtin:px4 profile))" in md
     page = (tmp_path / "run.html").read_text()
     assert "<h2>Commands × params" in page and 'class="chip changed' in page and "<th>16 NAV_WAYPOINT</th>" in page
 
