@@ -34,33 +34,34 @@ RAW is {"msg": NAME, "fields": {...}, "to": "target"|"broadcast"|"other-system"|
 
 Operations run until their result, bounded by the protocol's own timeouts; then every
 node is given a bounded time to return to idle. The invariants (`INVARIANTS`) are checked
-after every step.
+after every step. The operator-control steps (control_steps.py) and the liveness probe
+(liveness.py) are mixins of `Runner`; runs.py holds what a step ran, wire_plans.py how its
+wire items become a plan.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from mavconform.conformance.harness.stored_form import describe_differences
 from mavconform.reference_impl.mission import messages as m
-from mavconform.reference_impl.mission.constants import MissionResult
-from mavconform.reference_impl.mission.items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
-from mavconform.reference_impl.mission.results import OperationResult
+from mavconform.reference_impl.mission.items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionType
 from mavconform.reference_impl.mission.transitions import SlotState
 from mavconform.reference_impl.net.sim import CaptureHook
 from mavconform.reference_impl.wire.dialect import mavlink as _d
 from mavconform.reference_impl.handover import control_messages as cm
-from mavconform.reference_impl.handover.control_results import ControlResult, Decision
 
 from ..case import Violation
-from .control import CONTROL_INVARIANTS, WIRE_STATUS_GRACE, WIRE_STATUS_WAIT, operation_bound
+from .control import CONTROL_INVARIANTS, WIRE_STATUS_WAIT
 from .faults import build_fault_model
 from .gcs import FuzzGcs
 from .connection import TargetConnection
+from .control_steps import ControlSteps
+from .liveness import Liveness
+from .runs import ControlRun, Group, Run, describe_op
 from .versions import Plan, Versions, Write, describe_plan
-from .world import SYSTEM_A, SYSTEM_B, World, describe_system
+from .wire_plans import float_variant, wire_to_items
+from .world import World
 
 INVARIANTS: dict[str, str] = {
     "atomic-upload": "The vehicle's stored plan of each type is always one whole version it "
@@ -77,7 +78,6 @@ INVARIANTS: dict[str, str] = {
     "target-crash": "The vehicle never dies: an in-process vehicle never raises; a remote one keeps "
                     "sending HEARTBEAT and answering.",
 }
-DECISIONS = {"allow": Decision.ALLOW, "release": Decision.RELEASE, "refuse": Decision.REFUSE}
 
 
 def invariants(handover: bool = False) -> dict[str, str]:
@@ -85,59 +85,12 @@ def invariants(handover: bool = False) -> dict[str, str]:
     return {**INVARIANTS, **CONTROL_INVARIANTS} if handover else dict(INVARIANTS)
 
 
-HEARTBEAT_SILENCE = 3.0   # s without a HEARTBEAT (a 1 Hz stream) that make a silent target a crashed one
-
 MAX_ROUNDS = 10_000   # bound on the wait loop of one step (each round advances time or ends)
 UDP_DRAIN = 0.3       # s at most after stray messages over a real network, for their replies to land
 UDP_QUIET = 0.05      # s without an answer from the target that end that wait early
 
 
-@dataclass
-class _Run:
-    gcs: FuzzGcs
-    name: str
-    op: dict[str, Any]
-    done: int                     # len(gcs.results) when it started
-    started: float
-    plans: tuple[Plan, ...] = ()  # upload: what the vehicle may store if it applies it
-    result: OperationResult | None = None
-    # Its GCS sent stray messages meanwhile: the vehicle's replies to those carry no
-    # correlation id and may be taken for this operation's answer, so its result says
-    # nothing definite about the vehicle (a clear "refused" by a late reply to a stray).
-    untrusted: bool = False
-
-    @property
-    def finished(self) -> bool:
-        return len(self.gcs.results) > self.done
-
-
-@dataclass
-class _ControlRun:
-    """One operator-control operation of a GCS's control client, waited for like `_Run`."""
-
-    gcs: FuzzGcs
-    name: str
-    op: dict[str, Any]
-    done: int                     # len(gcs.control_results) when it started
-    started: float
-    bound: float                  # `control.operation_bound`
-
-    @property
-    def finished(self) -> bool:
-        return len(self.gcs.control_results) > self.done
-
-
-@dataclass
-class _Group:
-    """What one step did that the oracle must hear about."""
-
-    runs: list[_Run] = field(default_factory=list)
-    writes: list[Write] = field(default_factory=list)
-    strays: bool = False   # raw messages went out: their replies may still be on the way
-    controls: list[_ControlRun] = field(default_factory=list)
-
-
-class Runner:
+class Runner(ControlSteps, Liveness):
     """Applies steps to a fresh `World` and checks the invariants after each."""
 
     def __init__(self, target: str, seed: int, *, capture: CaptureHook | None = None,
@@ -172,7 +125,7 @@ class Runner:
         if step is None:   # about what the profile says the target does not have
             return None
         kind = step.get("op")
-        handler: Callable[[dict[str, Any]], _Group | Violation | None] = {
+        handler: Callable[[dict[str, Any]], Group | Violation | None] = {
             "upload": self._operation, "download": self._operation, "clear": self._operation,
             "set_current": self._operation, "cancel": self._cancel, "second_gcs": self._second_gcs,
             "stray": self._stray, "faults": self._faults, "wait": self._wait,
@@ -212,25 +165,25 @@ class Runner:
         return self._probe()
 
     # --- steps ----------------------------------------------------------------------------
-    def _operation(self, step: dict[str, Any]) -> _Group:
+    def _operation(self, step: dict[str, Any]) -> Group:
         if step.get("gcs") == "b":
-            return _Group(runs=[self._start(self.world.b, "B", step)])
-        return _Group(runs=[self._start(self.world.a, "A", step)])
+            return Group(runs=[self._start(self.world.b, "B", step)])
+        return Group(runs=[self._start(self.world.a, "A", step)])
 
-    def _cancel(self, step: dict[str, Any]) -> _Group:
+    def _cancel(self, step: dict[str, Any]) -> Group:
         run = self._start(self.world.a, "A", step["of"])
         self.world.run_until(lambda: run.finished, float(step["after"]))
         if not run.finished:
             self.world.a.cancel(self.world.now())
-        return _Group(runs=[run])
+        return Group(runs=[run])
 
-    def _second_gcs(self, step: dict[str, Any]) -> _Group:
+    def _second_gcs(self, step: dict[str, Any]) -> Group:
         first = self._start(self.world.a, "A", step["first"])
         self.world.run_until(lambda: first.finished, float(step["after"]))
-        return _Group(runs=[first, self._start(self.world.b, "B", step["second"])])
+        return Group(runs=[first, self._start(self.world.b, "B", step["second"])])
 
-    def _stray(self, step: dict[str, Any]) -> _Group:
-        group = _Group(strays=True)
+    def _stray(self, step: dict[str, Any]) -> Group:
+        group = Group(strays=True)
         during = step.get("during")
         if during:
             run = self._start(self.world.a, "A", during)
@@ -257,141 +210,16 @@ class Runner:
         self._faulty = self._faulty or not (up.is_clean and down.is_clean)
         return None
 
-    def _wait(self, step: dict[str, Any]) -> _Group:
+    def _wait(self, step: dict[str, Any]) -> Group:
         self.world.run_for(float(step["seconds"]))
-        return _Group()
-
-    # --- operator control (--operator-control) ------------------------------------------------------
-    def _control(self, step: dict[str, Any]) -> _Group:
-        """A request, release or takeover-flag change through the GCS's control client, waited
-        for to its result; `answer` is the owners' policy for forwarded requests from now on."""
-        w = self.world
-        gcs, name = self._control_gcs(step)
-        answer = DECISIONS.get(step.get("answer") or "")
-        for g in (w.a, w.b):
-            g.answer = answer
-        now = w.now()
-        action = step["action"]
-        timeout = min(max(float(step.get("timeout", cm.DEFAULT_REQUEST_TIMEOUT)), cm.TIMEOUT_MIN), cm.TIMEOUT_MAX)
-        wait = bool(step.get("wait_for_owner")) and action == "request"
-        if gcs.control_busy:
-            return _Group()   # still busy with an earlier one (it had no result in its bound)
-        run = _ControlRun(gcs, name, step, len(gcs.control_results), now, operation_bound(timeout, wait))
-        if action == "request":
-            gcs.request_control(now, allow_takeover=bool(step.get("allow")), timeout=timeout, wait=wait)
-        elif action == "release":
-            gcs.release_control(now)
-        elif action in ("allow", "disallow"):
-            if not gcs.set_takeover(action == "allow", now):
-                return _Group()   # not in control, as far as it knows: nothing to set
-        else:
-            raise ValueError(f"not a control action: {action!r}")
-        return _Group(controls=[run])
-
-    def _gcs_loss(self, step: dict[str, Any]) -> _Group:
-        """The GCS sends no HEARTBEAT for `seconds`, then beats again; `wait` s pass now."""
-        w = self.world
-        gcs, _ = self._control_gcs(step)
-        gcs.silence(w.now(), float(step["seconds"]))
-        w.run_for(float(step.get("wait", 0.0)))
-        return _Group()
-
-    def _control_gcs(self, step: dict[str, Any]) -> tuple[FuzzGcs, str]:
-        w = self.world
-        if not w.handover:
-            raise ValueError(f"a {step['op']} step needs operator control (--operator-control)")
-        return (w.b, "B") if step.get("gcs") == "b" else (w.a, "A")
-
-    def _fold_control(self, until: float | None = None) -> None:
-        """UDP: fold our GCSs' control results (those finished by `until`) into the wire judge
-        in finishing order, then widen it wherever the target may have dropped an owner: a GCS
-        that was silent, faults on the link its HEARTBEATs cross, an owner that never beats
-        (the loss timeout of a remote target is unknown). Idempotent."""
-        w = self.world
-        wire = w.wire
-        if wire is None:
-            return
-        new: list[tuple[float, int, ControlResult]] = []
-        for key, gcs in (("a", w.a), ("b", w.b)):
-            log = gcs.control_log
-            done = self._folded[key]
-            while done < len(log) and (until is None or log[done].finished <= until):
-                new.append((log[done].finished, gcs.system, log[done]))
-                done += 1
-            self._folded[key] = done
-        for _, sysid, result in sorted(new, key=lambda n: (n[0], n[1])):
-            wire.result(sysid, result, result.finished)
-        silent = [g for g in (w.a, w.b) if g.silent_until > self.step_started]
-        clean = w.link_clean()
-        if silent:
-            wire.widen([0], f"{', '.join(self._name(g.system) for g in silent)} falling silent")
-        elif self._faulty or not clean:
-            wire.widen([0], "the link faults (an owner's HEARTBEATs may not have got through)")
-        elif wire.possible and wire.possible - {0, SYSTEM_A, SYSTEM_B}:
-            wire.widen([0], "an owner that sends no HEARTBEAT")
-        self._faulty = not clean
-
-    def _wire_writes(self, group: _Group) -> Violation | None:
-        """UDP: a mission write the vehicle ACCEPTED while, by the answers so far, only another
-        GCS can have been in control was executed for a non-owner. Judged in the order the
-        results came; a write whose result came within WIRE_STATUS_GRACE of a control answer is
-        not judged (the two may have crossed on the link)."""
-        w = self.world
-        wire = w.wire
-        answers = [r.finished for g in (w.a, w.b) for r in g.control_log]
-        for run in sorted(group.runs, key=lambda r: r.gcs.results[r.done].finished):
-            result = run.gcs.results[run.done]
-            self._fold_control(until=result.finished)
-            if (not result.ok or run.untrusted or run.op["op"] not in ("upload", "clear")
-                    or any(abs(t - result.finished) < WIRE_STATUS_GRACE for t in answers)
-                    or wire.may_write(run.gcs.system)):
-                continue
-            could = " or ".join(sorted(self._name(s) for s in wire.possible or ()))
-            return self._violation("non-owner-executed", (
-                f"the vehicle ACCEPTED {describe_op(run.op)} by GCS {run.name}, which is not in control "
-                f"(after {wire.because} only {could} can be)"))
-        self._fold_control()
-        return None
-
-    def _name(self, sysid: int) -> str:
-        return describe_system(sysid) if sysid else "nobody"
-
-    def _wire_status(self) -> Violation | None:
-        """UDP: the target's latest CONTROL_STATUS, held against the wire judge. It must be
-        fresh (at most WIRE_STATUS_WAIT old: the stream is nominally 1 Hz) and sent after the
-        step's last answer had time to show in it; if it is not, the probe waits (bounded, on
-        a clean link) for one that is."""
-        w = self.world
-        wire = w.wire
-        self._fold_control()
-        now = w.now()
-        since = max(now - WIRE_STATUS_WAIT, wire.answered_at + WIRE_STATUS_GRACE)
-        wait = max(0.0, since - now) + WIRE_STATUS_WAIT
-        status = w.connection.control_status_after(since, wait)
-        if status is None:
-            return self._violation("control-status-lies", (
-                f"no CONTROL_STATUS from the target for {WIRE_STATUS_WAIT + wait:.1f} s, the last "
-                f"{wait:.1f} s on a clean link (it should come at about 1 Hz)"))
-        broken = wire.judge(status.gcs_main, status.gcs_secondary)
-        return None if broken is None else self._violation(*broken)
-
-    def _control_broken(self) -> Violation | None:
-        """What the in-process control judge saw (first violation), or our own bug in it."""
-        w = self.world
-        error = w.control_error()
-        if error is not None:
-            raise error
-        broken = w.watch.first if w.watch is not None else None
-        if broken is None:
-            return None
-        return self._violation(broken.invariant, f"{broken.detail} (at t={broken.at:.2f} s)")
+        return Group()
 
     # --- running operations ---------------------------------------------------------------
-    def _start(self, gcs: FuzzGcs, name: str, op: dict[str, Any]) -> _Run:
+    def _start(self, gcs: FuzzGcs, name: str, op: dict[str, Any]) -> Run:
         w = self.world
         now = w.now()
         gcs.listen()
-        run = _Run(gcs, name, op, len(gcs.results), now)
+        run = Run(gcs, name, op, len(gcs.results), now)
         kind = op["op"]
         if kind == "upload":
             t = MissionType(op["type"])
@@ -408,9 +236,9 @@ class Runner:
             raise ValueError(f"not an operation: {op!r}")
         return run
 
-    def _bound(self, run: _Run | _ControlRun) -> float:
+    def _bound(self, run: Run | ControlRun) -> float:
         """How long an operation may take: every message of it retried to the limit."""
-        if isinstance(run, _ControlRun):
+        if isinstance(run, ControlRun):
             return run.bound
         t = run.gcs.timings
         op = run.op
@@ -422,7 +250,7 @@ class Runner:
             n = 0
         return t.default_timeout * (t.max_retries + 2) * max(n + 2, 2)
 
-    def _wait_for_results(self, runs: list[_Run | _ControlRun]) -> Violation | None:
+    def _wait_for_results(self, runs: list[Run | ControlRun]) -> Violation | None:
         w = self.world
         for _ in range(MAX_ROUNDS):
             pending = [r for r in runs if not r.finished]
@@ -435,7 +263,7 @@ class Runner:
                 crashed = w.crashes()
                 if crashed:
                     return self._violation("target-crash", f"the vehicle raised and fell silent: {crashed[0]}")
-                if isinstance(late, _ControlRun):
+                if isinstance(late, ControlRun):
                     return self._violation("handover-unbounded", (
                         f"{describe_op(late.op)} by GCS {late.name} had no result {limit - late.started:g} s "
                         f"after it started (the control client's bound: its retries, and the request's "
@@ -446,7 +274,7 @@ class Runner:
             w.run_until(lambda: all(r.finished for r in runs), limit - now)
         return self._violation("one-result", "the operations of this step did not settle (wait loop bound)")
 
-    def _conclude(self, group: _Group) -> Violation | None:
+    def _conclude(self, group: Group) -> Violation | None:
         v = self._wait_for_results([*group.runs, *group.controls])
         if v is not None:
             return v
@@ -512,7 +340,7 @@ class Runner:
             return ""
         return f"; nearest: {describe_differences(best)} (compared as: {form.describe()})"
 
-    def _op_writes(self, run: _Run) -> list[Write]:
+    def _op_writes(self, run: Run) -> list[Write]:
         op, result = run.op, run.result
         assert result is not None
         confirmed = result.ok and not run.untrusted
@@ -538,7 +366,7 @@ class Runner:
             return [Write(types, ((),), confirmed, maybe, untouched)]
         return []
 
-    def _settle(self, group: _Group) -> Violation | None:
+    def _settle(self, group: Group) -> Violation | None:
         """Wait (bounded) until both ends are idle and, in virtual time, nothing is in
         flight: a late reply must not land in the next step's operation, where the GCS
         could take it for an answer (replies carry no request id)."""
@@ -595,168 +423,11 @@ class Runner:
             return Write((t,), (), False, False)
         return None
 
-    # --- liveness -------------------------------------------------------------------------
-    def _probe(self) -> Violation | None:
-        """MISSION_REQUEST_LIST from a third GCS over a clean link, retried like a GCS would;
-        a MISSION_COUNT (or any MISSION_ACK, e.g. DENIED) to it is an answer. A download it
-        opens is closed at once, so the probe leaves the vehicle as it found it."""
-        w = self.world
-        t = w.profile.timings
-        with w.faults_lifted():
-            for _ in range(t.max_retries + 1):
-                if self._ask_list(MissionType.MISSION):
-                    return self._counted(MissionType.MISSION) or (
-                        None if w.virtual else self._other_counts()) or (
-                        None if w.wire is None else self._wire_status())
-                age = w.heartbeat_age()
-                if age is not None and age > HEARTBEAT_SILENCE:
-                    break          # silent altogether: no use asking again
-        self._raise_tool_crash()
-        asked = f"MISSION_REQUEST_LIST (asked every {t.default_timeout:g} s)"
-        crashed = w.crashes()
-        if crashed:
-            return self._violation("target-crash", f"the vehicle raised and fell silent: {crashed[0]}")
-        age = w.heartbeat_age()
-        if age is not None and age > HEARTBEAT_SILENCE:
-            return self._violation("target-crash", (
-                f"the target fell silent: no HEARTBEAT for {_seconds(age)} and no answer to {asked}"))
-        beating = "" if age is None else " although its HEARTBEAT still comes"
-        return self._violation("target-hang", f"the vehicle did not answer {asked}{beating}")
-
-    def _ask_list(self, t: MissionType) -> bool:
-        """The probe asks for `t`'s list once: a MISSION_COUNT (or any MISSION_ACK, e.g.
-        DENIED) to it within the profile's timeout is an answer."""
-        w, probe = self.world, self.world.probe
-        me = probe.system
-        probe.listen()
-        probe.send_raw(m.request_list_message(t, w.target))
-        return w.run_until(lambda: any(msg._type in ("MISSION_COUNT", "MISSION_ACK") and msg.target_system == me
-                                       for msg in probe.heard), w.profile.timings.default_timeout)
-
-    def _counted(self, t: MissionType) -> Violation | None:
-        """Judge the MISSION_COUNT the probe heard for `t` (if any) against the lengths of
-        the plans the vehicle may hold, and close the download it opened."""
-        w, probe = self.world, self.world.probe
-        count = probe.counts.get(int(t))
-        if count is not None and not self.versions.allows_count(t, count):
-            return self._violation("download-matches-upload", (
-                f"the vehicle reports {count} {t.label} items (MISSION_COUNT to a MISSION_REQUEST_LIST), "
-                f"but every version it may hold has another length ({self.versions.describe(t)})"))
-        if count:
-            probe.send_raw(m.ack_message(MissionResult.OPERATION_CANCELLED, t, w.target))
-            w.run_until(_always, 0.0)
-        return None
-
-    def _other_counts(self) -> Violation | None:
-        """Over the wire the store cannot be read: the fence and rally counts are asked
-        too (one try each, a few milliseconds), so a plan of the wrong length is seen after
-        the step that made it, not only when a download happens to follow."""
-        for t in (MissionType.FENCE, MissionType.RALLY):
-            if self._ask_list(t):
-                v = self._counted(t)
-                if v is not None:
-                    return v
-        return None
-
-    def _raise_tool_crash(self) -> None:
-        """One of our own GCS nodes raised: that is our bug, never the target's."""
-        exc = self.world.tool_crash()
-        if exc is not None:
-            raise exc
-
     def _violation(self, invariant: str, detail: str) -> Violation:
         return Violation(invariant, detail, self.index if self.index >= 0 else None)
 
 
 # --- helpers ---------------------------------------------------------------------------------
-
-WIRE_FIELDS = ("frame", "command", "param1", "param2", "param3", "param4", "x", "y", "z",
-               "current", "autocontinue")
-
-
-def wire_to_items(wire: list[dict[str, Any]], t: MissionType
-                  ) -> tuple[list[MissionItem], dict[int, dict[str, int | float]]]:
-    """Wire items -> the `MissionItem`s the client uploads, and the fields to rewrite on the
-    way out: a "seq" or "mission_type" that differs from the transfer's (on either item
-    message), and "fx"/"fy", floats that go out in MISSION_ITEM.x/y instead of the item's
-    int x/y converted (MISSION_ITEM_INT keeps the int x/y; `fuzz.protocol.gcs.outgoing`)."""
-    items, rewrite = [], {}
-    for seq, d in enumerate(wire):
-        items.append(MissionItem(seq, int(d["frame"]), int(d["command"]), float(d["param1"]),
-                                 float(d["param2"]), float(d["param3"]), float(d["param4"]),
-                                 int(d["x"]), int(d["y"]), float(d["z"]), int(d["current"]),
-                                 int(d["autocontinue"]), t))
-        over: dict[str, int | float] = {k: int(d[k]) for k in ("seq", "mission_type") if k in d}
-        over.update((k, float(d[k])) for k in ("fx", "fy") if k in d)
-        if over:
-            rewrite[seq] = over
-    return items, rewrite
-
-
-def float_variant(plan: Plan, rewrite: dict[int, dict[str, Any]] | None = None, *,
-                  truncate: bool = False) -> Plan | None:
-    """The plan as a vehicle stores it when the items came as MISSION_ITEM (float x/y):
-    each item's x/y as it went out (its int x/y converted, or the "fx"/"fy" override in
-    `rewrite[seq]`), rounded to float32 by the wire and converted back the vehicle's way
-    (`MissionItem.int_xy_from_float`, the spec vehicle's own). None if some item's x/y
-    cannot be an int32 there (NaN, +-inf, 1e10, 215 deg): a vehicle must refuse that item
-    (MAV_MISSION_INVALID_PARAM5_X / _PARAM6_Y), and one that accepts it stores a plan
-    nobody can know, which then matches no candidate and is a finding.
-
-    `truncate`: the conversion a C vehicle does, a float32 product cast to int32, which
-    truncates toward zero (ArduPilot, GCS_Common.cpp `convert_MISSION_ITEM_to_MISSION_ITEM_INT`:
-    `x = packet.x * 1.0e7f`): seen on ArduCopter SITL, a rally point sent as x = -1940
-    degE7 by MISSION_ITEM came back as -1939."""
-    from mavconform.reference_impl.mission.items import to_float32, xy_scale
-    out = []
-    for it in plan:
-        fx, fy = it.float_xy()
-        over = rewrite.get(it.seq) if rewrite else None
-        if over:
-            fx = to_float32(over["fx"]) if "fx" in over else fx
-            fy = to_float32(over["fy"]) if "fy" in over else fy
-        x, y = MissionItem.int_xy_from_float(it.frame, fx, fy)
-        if x is None or y is None:
-            return None
-        if truncate:
-            scale = to_float32(xy_scale(it.frame))
-            x, y = (math.trunc(to_float32(fx * scale)), math.trunc(to_float32(fy * scale)))
-        out.append(MissionItem(it.seq, it.frame, it.command, it.param1, it.param2, it.param3,
-                               it.param4, x, y, it.z, it.current, it.autocontinue, it.mission_type))
-    return tuple(out)
-
-
-def describe_op(op: dict[str, Any]) -> str:
-    kind = op.get("op")
-    label = _type_label(op.get("type"))
-    if kind == "upload":
-        return f"an upload of {len(op['items'])} {label} items" + (" (float)" if op.get("float") else "")
-    if kind == "download":
-        return f"a download of the {label} plan"
-    if kind == "clear":
-        return f"a clear of the {label} plan" + ("s" if op.get("type") == MissionType.ALL else "")
-    if kind == "set_current":
-        how = "MAV_CMD_DO_SET_MISSION_CURRENT" if op.get("command") else "MISSION_SET_CURRENT"
-        return f"a set-current to {op.get('seq')} ({how})"
-    if kind == "control":
-        action = op.get("action")
-        if action == "request":
-            return (f"a request for control (takeover {'allowed' if op.get('allow') else 'disallowed'}, "
-                    f"timeout {op.get('timeout', cm.DEFAULT_REQUEST_TIMEOUT):g} s"
-                    + (", waiting for the owner)" if op.get("wait_for_owner") else ")"))
-        return {"release": "a release of control", "allow": "allowing takeover",
-                "disallow": "disallowing takeover"}.get(action, f"control {action}")
-    if kind == "gcs_loss":
-        return f"{op.get('seconds')} s without HEARTBEAT"
-    return str(kind)
-
-
-def _type_label(value: Any) -> str:
-    if value == MissionType.ALL:
-        return "all"
-    t = PLAN_TYPE_BY_VALUE.get(value)
-    return t.label if t is not None else str(value)
-
 
 def _always() -> bool:
     return True

@@ -25,7 +25,8 @@ from mavconform.fuzz.case import Case
 from mavconform.fuzz.protocol import Knobs, replay, search
 from mavconform.fuzz.protocol import machine as machine_module
 from mavconform.fuzz.protocol.gcs import outgoing
-from mavconform.fuzz.protocol.steps import Runner, float_variant, wire_to_items
+from mavconform.fuzz.protocol.steps import Runner
+from mavconform.fuzz.protocol.wire_plans import float_variant, wire_to_items
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import MissionResult
 from mavconform.reference_impl.mission.items import INT32_MAX, INT32_MIN, MissionItem, MissionType, xy_scale

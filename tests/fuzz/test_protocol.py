@@ -225,7 +225,7 @@ def test_a_float_item_may_be_stored_truncated_as_a_c_vehicle_does():
     """Learned on ArduCopter SITL: a rally point sent by MISSION_ITEM with x = -1940 degE7
     (float -0.000194) was stored as -1939 (`x = packet.x * 1.0e7f`, a cast that truncates).
     Both conversions are versions the vehicle may hold; nothing else is."""
-    from mavconform.fuzz.protocol.steps import float_variant
+    from mavconform.fuzz.protocol.wire_plans import float_variant
     from mavconform.reference_impl.mission.items import MissionItem, MissionType
     plan = (MissionItem(0, 6, 5100, x=-1940, y=-5160, z=10.0, mission_type=MissionType.RALLY),)
     rounded, truncated = float_variant(plan), float_variant(plan, truncate=True)

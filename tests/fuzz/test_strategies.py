@@ -16,7 +16,7 @@ from hypothesis.errors import NoSuchExample
 from mavconform.fuzz import strategies as fs
 from mavconform.fuzz.protocol.faults import CutAfter, build_fault_model
 from mavconform.fuzz.protocol.gcs import outgoing
-from mavconform.fuzz.protocol.steps import wire_to_items
+from mavconform.fuzz.protocol.wire_plans import wire_to_items
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.items import (
     GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, MissionType, to_float32,
