@@ -68,7 +68,6 @@ details.group > summary { color: #57606a; }
 p.members { font-size: .9em; }
 ol.failed-index { padding-left: 1.5em; } ol.failed-index li { margin: .2em 0; }
 ol.failed-index .why { color: #57606a; font-size: .9em; display: block; }
-h3.part { margin-top: 1.5em; color: #57606a; }
 blockquote { margin: .5em 0; padding: .3em 1em; border-left: 4px solid #d0d7de;
              background: #f6f8fa; }
 blockquote cite { display: block; font-size: .85em; color: #57606a; }
