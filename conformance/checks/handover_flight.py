@@ -32,11 +32,10 @@ from ..harness.tester import Tester
 from ..outcome import NotApplicable, PreconditionFailed
 from ..session import Session
 from .handover_route import Route, sampled_path
-from .operator_control import REQUEST_ACK, _latest_status, _unsupported, release_if_ours
+from .control_exchange import REQUEST_ACK, REQUEST_TIMEOUT, gcs_id, latest_status, refuse_if_unsupported, release_if_ours, result_text
 
 MISSION = MissionType.MISSION
 FRAME_GLOBAL_RELATIVE_ALT = _d.MAV_FRAME_GLOBAL_RELATIVE_ALT   # the path's altitudes are metres above home
-REQUEST_TIMEOUT = 10.0   # param 3 of the testers' own requests (s), as HO.CTL's
 INVITE_GRACE = 3.0       # s after the dwell, counted from the first position report inside the region
 MIN_SPEED = 2.0          # m/s: the slowest flight the bounds allow for
 FLIGHT_MARGIN = 20.0     # s on top of a flight's bound
@@ -88,10 +87,6 @@ def arrival_of(t: Tester, frame: Frame) -> float:
     return next((at for at, f in reversed(t.node.inbox) if f is frame), t.now())
 
 
-def result_text(frame: Frame | None) -> str:
-    return "no COMMAND_ACK" if frame is None else procedures.command_result_name(frame.msg.result)
-
-
 def is_accepted(frame: Frame | None) -> bool:
     return frame is not None and frame.msg.result == CommandResult.ACCEPTED
 
@@ -102,10 +97,6 @@ def params_text(frame: Frame) -> str:
 
 
 # --- the GCSs' steps ---------------------------------------------------------------------------
-
-def gcs_id(t: Tester) -> int:
-    return t.node.endpoint.system
-
 
 def ask_control(t: Tester, action: float, allow: bool = False, timeout: float = REQUEST_TIMEOUT) -> Frame | None:
     """32100 from `t` for itself; the COMMAND_ACK to it (None after the reply timeout)."""
@@ -220,7 +211,7 @@ def flown(s: Session, route: Route, hold_s: float) -> Iterator[Flight]:
     before = procedures.stored(a, MISSION)
     a.note(f"GCS {route.parent} (the commander) takes control for the flight")
     frame = ask_control(a, cm.ACTION_REQUEST)
-    _unsupported(frame)
+    refuse_if_unsupported(frame)
     if not is_accepted(frame):
         raise PreconditionFailed(f"setup: GCS {route.parent}'s request for control got {result_text(frame)} "
                                  "(HO.CTL.02 judges that)")
@@ -273,7 +264,7 @@ def land_flight(s: Session, route: Route, a: Tester, b: Tester, flight: Flight |
         a.note("afterwards: the flight is waited out")
         if not a.wait_until(flight_ended(flight), flight_wait(flight)):
             a.note(f"the flight did not end within {flight_wait(flight) * s.scale:g} s; going on")
-    last = _latest_status(a)
+    last = latest_status(a)
     owner = last.msg.gcs_main if last is not None else 0
     holder = {route.parent: a, route.partner: b}.get(owner, a)
     style, watch = started

@@ -68,7 +68,7 @@ from .handover_flight import (NO_MISSION_COMPUTER, Flight, ack_command, arrival_
                               command_from, flown, gcs_id, is_accepted, is_request_to, params_text, partner_asks,
                               positions_between, result_text, statuses_between, the_gcss)
 from .handover_route import Route, route_for
-from .operator_control import STATUS_WAIT, TAKEOVER, _shown, _status_text, _system_manager
+from .control_exchange import STATUS_WAIT, TAKEOVER, shown, status_text, system_manager
 
 RELAYED = msg(("COMMAND_LONG", "COMMAND_INT"), command=cm.REQUEST_CONTROL)   # 32100 from the vehicle
 AUTH_HOLD = 1.5          # s the commander waits before it authorises (HO.SEQ.03's window)
@@ -185,7 +185,7 @@ def _observed(s: Session) -> _Cooperative:
 
 
 def _applicable(s: Session) -> Route:
-    _system_manager(s)
+    system_manager(s)
     if NO_MISSION_COMPUTER in s.cache:
         raise NotApplicable(s.cache[NO_MISSION_COMPUTER])
     if not s.allow_flight:
@@ -267,9 +267,9 @@ def no_switch_before_authorisation(s: Session) -> None:
                                "until then")
     for at, frame in obs.held:
         if frame.msg.gcs_main != route.parent:
-            _shown(a, frame)
+            shown(a, frame)
             raise ClauseFailed(Measured(f"<after> s after GCS {route.partner} asked for control, before the "
-                                        f"commander authorised, {_status_text(frame)} came; expected "
+                                        f"commander authorised, {status_text(frame)} came; expected "
                                         f"gcs_main={route.parent} until the commander's word",
                                         after=f"{at - obs.asked_at:.2f}"))
     if obs.repeat_ack is not None:
@@ -294,7 +294,7 @@ def switch_after_authorisation(s: Session) -> None:
     if obs.named is None:
         raise ClauseFailed(f"GCS {route.partner} was granted control, but no CONTROL_STATUS with "
                            f"gcs_main={route.partner} came within {STATUS_WAIT * s.scale:g} s")
-    _shown(a, obs.named)
+    shown(a, obs.named)
 
 
 @check("HO.SEQ.05")
@@ -422,9 +422,9 @@ def silent_commander_keeps_control(s: Session) -> None:
     statuses = statuses_between(a, obs.invited_at, obs.until)
     for at, frame in statuses:
         if frame.msg.gcs_main != route.parent:
-            _shown(a, frame)
+            shown(a, frame)
             raise ClauseFailed(Measured(f"GCS {route.parent}, the commander, never authorised, yet <after> s after "
-                                        f"the invitation {_status_text(frame)} came; expected GCS {route.parent} "
+                                        f"the invitation {status_text(frame)} came; expected GCS {route.parent} "
                                         f"to keep control and the handover to end within its {route.bound:g} s bound",
                                         after=f"{at - obs.invited_at:.2f}"))
     for frame in obs.retries:
@@ -439,5 +439,5 @@ def silent_commander_keeps_control(s: Session) -> None:
     if not late:
         raise PreconditionFailed(f"no CONTROL_STATUS came after the {route.bound:g} s bound to judge by "
                                  "(HO.CTL.01 judges the stream)")
-    _shown(a, late[-1])
+    shown(a, late[-1])
 

@@ -26,12 +26,12 @@ undecided (a real operator holds the vehicle: the suite does not take it from th
 clause builds on but does not judge (taking control for the clause, the owner allowing
 takeover) make it undecided when they fail, never failed: the clause that owns the step
 judges it. Whatever happens, a clause ends with both GCSs releasing control and beating
-again (`_restoring`), so the target is left as it was found; HO.CTL.11, which writes a plan
+again (`restoring`), so the target is left as it was found; HO.CTL.11, which writes a plan
 as the owner, puts the plan back first. Every wait is bounded.
 
 Evidence. The exchange keeps mission traffic, COMMAND_LONG and COMMAND_ACK only, so the
 1 Hz CONTROL_STATUS stream cannot make mission clauses' reports differ between runs; a
-CONTROL_STATUS a clause judges is added to its exchange by the check (`_shown`).
+CONTROL_STATUS a clause judges is added to its exchange by the check (`shown`).
 
 Owner loss (HO.CTL.13). The owner (GCS 246) stops its HEARTBEATs and sends nothing else; GCS
 245 keeps beating, so a manager that takes any GCS's HEARTBEAT for the owner's keeps it. The
@@ -46,180 +46,37 @@ CONTROL_STATUS comes.
 
 from __future__ import annotations
 
-from contextlib import contextmanager
-from typing import Iterator
 
 from mavconform.reference_impl.handover import control_messages as cm
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import Cmd, CommandResult, MissionResult
 from mavconform.reference_impl.mission.items import MissionType
-from mavconform.reference_impl.wire.frame import Frame
 
 from ..harness import plans, procedures
-from ..harness.exchange import message_fields
 from ..harness.match import ack, msg, request
 from ..harness.measured import Measured
 from ..harness.tester import Tester
-from ..outcome import ClauseFailed, NotApplicable, PreconditionFailed
+from ..outcome import ClauseFailed, PreconditionFailed
 from ..session import Session
 from . import check
+from .control_exchange import (FORWARDED, REQUEST_CONTROL, REQUEST_TIMEOUT, STATUS, STATUS_WAIT, TAKEOVER, ask_control,
+                               gcs_id, latest_status, next_status, refuse_if_unsupported, restoring, result_text,
+                               send_command, shown, start_uncontrolled, status_text, system_manager, take_control)
 
-REQUEST_CONTROL = cm.REQUEST_CONTROL
-STATUS = msg("CONTROL_STATUS")
-REQUEST_ACK = msg("COMMAND_ACK", command=REQUEST_CONTROL)
-FORWARDED = msg(("COMMAND_LONG", "COMMAND_INT"), command=REQUEST_CONTROL)
-TAKEOVER = cm.FLAG_TAKEOVER_ALLOWED
 MISSION = MissionType.MISSION
 MT = int(MISSION)
 
-PROBE_WAIT = 3.0            # s: three periods of the nominal 1 Hz stream, on top of the run so far
-STATUS_WAIT = 3.5           # s: the stream's next CONTROL_STATUS, at the slowest a vehicle may still be judged
 ON_CHANGE = 0.5             # s after the COMMAND_ACK: "emitted when ... change", not the stream's next
 STREAM_COUNT = 3            # CONTROL_STATUS timed to measure the stream (two gaps)
 STREAM_PERIOD = (0.5, 2.0)  # s between CONTROL_STATUS accepted as "nominally 1 Hz" (as MIS.CUR.06)
-REQUEST_TIMEOUT = 10.0      # param 3 of our requests (s; the XML's bounds are 3-60)
 OWNER_LOSS_WAIT = 15.0      # s an external target is given to announce a silent owner's loss
-_PROBE = "ho.control_status"
-
-
-# --- helpers ---------------------------------------------------------------------------------
-
-def _id(t: Tester) -> int:
-    return t.node.endpoint.system
-
-
-def _result(frame: Frame | None) -> str:
-    return "no COMMAND_ACK" if frame is None else procedures.command_result_name(frame.msg.result)
-
-
-def _latest_status(t: Tester) -> Frame | None:
-    """The last CONTROL_STATUS the target sent, whatever the floor."""
-    for _, frame in reversed(t.node.inbox):
-        if frame.msg._type == "CONTROL_STATUS":
-            return frame
-    return None
-
-
-def _system_manager(s: Session) -> None:
-    """Not-applicable unless the target streams CONTROL_STATUS (looked for once per run)."""
-    seen = s.cache.get(_PROBE)
-    if seen is None:
-        t = s.t
-        seen = _latest_status(t) is not None or t.poll_for(STATUS, PROBE_WAIT, forced=True) is not None
-        s.cache[_PROBE] = seen
-    if not seen:
-        raise NotApplicable(f"the target sent no CONTROL_STATUS (none since the run began, nor in "
-                            f"{PROBE_WAIT * s.scale:g} s more): it has no system manager for operator control")
-
-
-def _shown(t: Tester, frame: Frame) -> Frame:
-    """Put a CONTROL_STATUS the clause judges into its exchange (which keeps mission traffic
-    only) and mark it as what decided, so the report shows the message the verdict is about."""
-    ex = t.exchange
-    if ex is not None:
-        when = next((at for at, f in reversed(t.node.inbox) if f is frame), t.now())
-        index = ex.add(when, "rx", t.node.name, frame.msg._type, message_fields(frame.msg))
-        if index is not None:
-            t.decided_by = index
-    return frame
-
-
-def _status_text(frame: Frame) -> str:
-    flags = frame.msg.flags
-    names = [n for bit, n in ((cm.FLAG_SYSTEM_MANAGER, "SYSTEM_MANAGER"), (TAKEOVER, "TAKEOVER_ALLOWED"))
-             if flags & bit]
-    return f"CONTROL_STATUS{{gcs_main={frame.msg.gcs_main}, flags={'|'.join(names) or 0}}}"
-
-
-def _ask(t: Tester, action: float, allow: bool = False) -> Frame | None:
-    """MAV_CMD_REQUEST_OPERATOR_CONTROL from `t` for itself (param 4 = its own id); the
-    COMMAND_ACK addressed to it, or None after the reply timeout."""
-    t.send(cm.request_command(t.target, action, allow, REQUEST_TIMEOUT, _id(t)))
-    return t.poll_for(REQUEST_ACK, t.timings.default_timeout)
-
-
-def _command(t: Tester, command: int, *params: float) -> Frame | None:
-    """COMMAND_LONG `command` from `t`; its COMMAND_ACK, or None after the reply timeout."""
-    t.send(m.command_long_message(command, t.target, *params))
-    return t.poll_for(msg("COMMAND_ACK", command=int(command)), t.timings.default_timeout)
-
-
-def _unsupported(frame: Frame | None) -> None:
-    if frame is not None and frame.msg.result == CommandResult.UNSUPPORTED:
-        raise NotApplicable("MAV_CMD_REQUEST_OPERATOR_CONTROL was answered MAV_RESULT_UNSUPPORTED: the "
-                            "target has no operator control")
-
-
-def _take(t: Tester, allow: bool = False, *, what: str = "", judged_by: str | None = "HO.CTL.02") -> Frame:
-    """A request by `t` that the clause builds on: ACCEPTED, or the clause is undecided.
-    `judged_by`: the clause that judges this step, if one does (the owner's re-requests
-    that set the takeover flag are steps no clause judges on their own)."""
-    takeover = "allowed" if allow else "not allowed"
-    t.note(what or f"GCS {_id(t)} asks for control (takeover {takeover})")
-    frame = _ask(t, cm.ACTION_REQUEST, allow)
-    _unsupported(frame)
-    if frame is None or frame.msg.result != CommandResult.ACCEPTED:
-        raise PreconditionFailed(f"setup: GCS {_id(t)}'s request for control (takeover {takeover}) got "
-                                 f"{_result(frame)}" + (f" ({judged_by} judges that)" if judged_by else ""))
-    return frame
-
-
-def _start(s: Session) -> tuple[Tester, Tester]:
-    """Both GCSs, with the target uncontrolled as far as the suite can make it: a GCS of ours
-    in control releases; another GCS in control leaves the clause undecided."""
-    _system_manager(s)
-    t, t2 = s.t, s.second()
-    release_if_ours(t, [t, t2])
-    return t, t2
-
-
-def release_if_ours(t: Tester, ours: list[Tester]) -> None:
-    """A GCS of `ours` that the last CONTROL_STATUS names releases control; another
-    operator's control leaves the clause undecided (the suite never takes it from them)."""
-    by_id = {_id(x): x for x in ours}
-    last = _latest_status(t)
-    owner = last.msg.gcs_main if last is not None else 0
-    if owner and owner not in by_id:
-        raise PreconditionFailed(f"GCS {owner} is in control of the target (CONTROL_STATUS gcs_main): the "
-                                 "clause needs it uncontrolled, and the suite does not take it from another "
-                                 "operator; release it and run again")
-    if owner:
-        by_id[owner].note(f"the last CONTROL_STATUS names GCS {owner}: it releases control first")
-        _ask(by_id[owner], cm.ACTION_RELEASE)
-
-
-@contextmanager
-def _restoring(s: Session) -> Iterator[None]:
-    """Leave the target as found: both GCSs beat again and release control (a GCS not in
-    control is told so, which is harmless). What decided the verdict stays marked."""
-    try:
-        yield
-    finally:
-        t = s.t
-        keep = t.decided_by
-        for tester in s.testers():
-            tester.node.heartbeats = True
-        t.note("afterwards: both GCSs release control, leaving the target uncontrolled")
-        for tester in s.testers():
-            _ask(tester, cm.ACTION_RELEASE)
-        t.decided_by = keep
-
-
-def _next_status(t: Tester, what: str) -> Frame:
-    """The stream's next CONTROL_STATUS (a setup step: none, and the clause is undecided)."""
-    t.mark()
-    frame = t.poll_for(STATUS, STATUS_WAIT, forced=True)
-    if frame is None:
-        raise PreconditionFailed(f"setup: {what}: no CONTROL_STATUS within {STATUS_WAIT * t.scale:g} s "
-                                 "(HO.CTL.01 judges the stream)")
-    return frame
 
 
 # --- the stream --------------------------------------------------------------------------------
 
 @check("HO.CTL.01")
 def status_streamed(s: Session) -> None:
-    _system_manager(s)
+    system_manager(s)
     t = s.t
     t.mark()
     times: list[float] = []
@@ -227,7 +84,7 @@ def status_streamed(s: Session) -> None:
         frame = t.poll_for(STATUS, STATUS_WAIT, forced=True)
         if frame is None:
             break
-        _shown(t, frame)
+        shown(t, frame)
         times.append(next(at for at, f in reversed(t.node.inbox) if f is frame))
     if len(times) < 2:
         raise ClauseFailed(f"after {len(times)} CONTROL_STATUS, none came within {STATUS_WAIT * s.scale:g} s; "
@@ -245,56 +102,56 @@ def status_streamed(s: Session) -> None:
 
 @check("HO.CTL.02")
 def granted_when_uncontrolled(s: Session) -> None:
-    t, _ = _start(s)
-    with _restoring(s):
+    t, _ = start_uncontrolled(s)
+    with restoring(s):
         t.mark()
-        t.note(f"nobody is in control; GCS {_id(t)} asks for control (takeover not allowed)")
-        frame = _ask(t, cm.ACTION_REQUEST)
-        _unsupported(frame)
+        t.note(f"nobody is in control; GCS {gcs_id(t)} asks for control (takeover not allowed)")
+        frame = ask_control(t, cm.ACTION_REQUEST)
+        refuse_if_unsupported(frame)
         if frame is None:
             raise ClauseFailed(f"MAV_CMD_REQUEST_OPERATOR_CONTROL (request, nobody in control) drew no "
                                f"COMMAND_ACK within {t.reply_timeout:g} s; expected MAV_RESULT_ACCEPTED")
         if frame.msg.result != CommandResult.ACCEPTED:
             raise ClauseFailed(f"a request for control while nobody was in control was answered "
-                               f"{_result(frame)}; expected MAV_RESULT_ACCEPTED")
+                               f"{result_text(frame)}; expected MAV_RESULT_ACCEPTED")
 
 
 @check("HO.CTL.03")
 def release_frees_control(s: Session) -> None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
         t.mark()
-        t.note(f"GCS {_id(t)}, in control, releases it")
-        frame = _ask(t, cm.ACTION_RELEASE)
+        t.note(f"GCS {gcs_id(t)}, in control, releases it")
+        frame = ask_control(t, cm.ACTION_RELEASE)
         if frame is None or frame.msg.result != CommandResult.ACCEPTED:
-            raise ClauseFailed(f"the owner's release of control was answered {_result(frame)}; expected "
+            raise ClauseFailed(f"the owner's release of control was answered {result_text(frame)}; expected "
                                "MAV_RESULT_ACCEPTED")
         free = t.poll_for(msg("CONTROL_STATUS", gcs_main=0), STATUS_WAIT, forced=True)
         if free is None:
-            last = _latest_status(t)
+            last = latest_status(t)
             if last is not None:
-                _shown(t, last)
-            raise ClauseFailed(f"after GCS {_id(t)} released control (MAV_RESULT_ACCEPTED), no CONTROL_STATUS "
+                shown(t, last)
+            raise ClauseFailed(f"after GCS {gcs_id(t)} released control (MAV_RESULT_ACCEPTED), no CONTROL_STATUS "
                                f"with gcs_main=0 came within {STATUS_WAIT * s.scale:g} s"
-                               + (f"; the last was {_status_text(last)}" if last is not None else "")
+                               + (f"; the last was {status_text(last)}" if last is not None else "")
                                + "; expected the vehicle uncontrolled")
-        _shown(t, free)
+        shown(t, free)
         t2.mark()
-        t2.note(f"GCS {_id(t2)} asks for control of the uncontrolled vehicle")
-        frame = _ask(t2, cm.ACTION_REQUEST)
+        t2.note(f"GCS {gcs_id(t2)} asks for control of the uncontrolled vehicle")
+        frame = ask_control(t2, cm.ACTION_REQUEST)
         if frame is None or frame.msg.result != CommandResult.ACCEPTED:
-            raise ClauseFailed(f"after GCS {_id(t)} released control, GCS {_id(t2)}'s request was answered "
-                               f"{_result(frame)}; expected MAV_RESULT_ACCEPTED (nobody in control)")
+            raise ClauseFailed(f"after GCS {gcs_id(t)} released control, GCS {gcs_id(t2)}'s request was answered "
+                               f"{result_text(frame)}; expected MAV_RESULT_ACCEPTED (nobody in control)")
 
 
 @check("HO.CTL.04")
 def stream_names_the_owner(s: Session) -> None:
-    t, _ = _start(s)
-    with _restoring(s):
-        _take(t)
+    t, _ = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
         t.mark()
-        me = _id(t)
+        me = gcs_id(t)
         for n in (1, 2):   # the change's own CONTROL_STATUS (if sent at once), then the stream's
             frame = t.poll_for(STATUS, STATUS_WAIT, forced=True)
             if frame is None:
@@ -302,7 +159,7 @@ def stream_names_the_owner(s: Session) -> None:
                     raise ClauseFailed(f"after GCS {me} was granted control, no CONTROL_STATUS came within "
                                        f"{STATUS_WAIT * s.scale:g} s; expected one naming it")
                 return   # one CONTROL_STATUS named it; how often the stream comes is HO.CTL.01's
-            _shown(t, frame)
+            shown(t, frame)
             if frame.msg.gcs_main != me:
                 raise ClauseFailed(f"after GCS {me} was granted control (MAV_RESULT_ACCEPTED), CONTROL_STATUS "
                                    f"#{n} said gcs_main={frame.msg.gcs_main}; expected {me}")
@@ -310,157 +167,157 @@ def stream_names_the_owner(s: Session) -> None:
 
 @check("HO.CTL.05")
 def status_sent_on_change(s: Session) -> None:
-    t, _ = _start(s)
-    me = _id(t)
-    with _restoring(s):
-        synced = _next_status(t, "the stream's next CONTROL_STATUS, to time the change by")
+    t, _ = start_uncontrolled(s)
+    me = gcs_id(t)
+    with restoring(s):
+        synced = next_status(t, "the stream's next CONTROL_STATUS, to time the change by")
         if synced.msg.gcs_main != 0:
-            raise PreconditionFailed(f"control was not free: {_status_text(synced)} (HO.CTL.03 judges release)")
-        _take(t, what=f"right after a streamed CONTROL_STATUS, GCS {me} asks for control: the stream's next "
+            raise PreconditionFailed(f"control was not free: {status_text(synced)} (HO.CTL.03 judges release)")
+        take_control(t, what=f"right after a streamed CONTROL_STATUS, GCS {me} asks for control: the stream's next "
                       "is about a second away")
         got = t.poll_for(msg("CONTROL_STATUS", gcs_main=me), ON_CHANGE)
         if got is None:
             raise ClauseFailed(f"after GCS {me} was granted control (MAV_RESULT_ACCEPTED), no CONTROL_STATUS "
                                f"naming it came within {ON_CHANGE * s.scale:g} s; expected one at once, when "
                                "ownership changed")
-        _shown(t, got)
-        _next_status(t, "the stream's next CONTROL_STATUS, to time the change by")
-        _take(t, True, what=f"right after a streamed CONTROL_STATUS, GCS {me}, in control, re-requests it "
+        shown(t, got)
+        next_status(t, "the stream's next CONTROL_STATUS, to time the change by")
+        take_control(t, True, what=f"right after a streamed CONTROL_STATUS, GCS {me}, in control, re-requests it "
                             "with takeover allowed", judged_by=None)
         got = t.poll_for(msg("CONTROL_STATUS", gcs_main=me, flags=lambda f: bool(f & TAKEOVER)), ON_CHANGE)
         if got is None:
             raise ClauseFailed(f"after GCS {me}, in control, allowed takeover (MAV_RESULT_ACCEPTED), no "
                                f"CONTROL_STATUS with GCS_CONTROL_STATUS_FLAGS_TAKEOVER_ALLOWED came within "
                                f"{ON_CHANGE * s.scale:g} s; expected one at once, when the takeover status changed")
-        _shown(t, got)
+        shown(t, got)
 
 
 @check("HO.CTL.06")
 def busy_request_refused(s: Session) -> None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
         t2.mark()
-        t2.note(f"GCS {_id(t)} is in control (takeover not allowed); GCS {_id(t2)} asks for control")
-        frame = _ask(t2, cm.ACTION_REQUEST)
+        t2.note(f"GCS {gcs_id(t)} is in control (takeover not allowed); GCS {gcs_id(t2)} asks for control")
+        frame = ask_control(t2, cm.ACTION_REQUEST)
         if frame is None:
-            raise ClauseFailed(f"GCS {_id(t2)}'s request for control, while GCS {_id(t)} held it, drew no "
+            raise ClauseFailed(f"GCS {gcs_id(t2)}'s request for control, while GCS {gcs_id(t)} held it, drew no "
                                f"COMMAND_ACK within {t2.reply_timeout:g} s; expected MAV_RESULT_FAILED")
         if frame.msg.result == CommandResult.ACCEPTED:
-            raise ClauseFailed(f"GCS {_id(t2)}'s request was granted (MAV_RESULT_ACCEPTED) while GCS {_id(t)} "
+            raise ClauseFailed(f"GCS {gcs_id(t2)}'s request was granted (MAV_RESULT_ACCEPTED) while GCS {gcs_id(t)} "
                                "held control with takeover not allowed; expected MAV_RESULT_FAILED")
         if frame.msg.result != CommandResult.FAILED:
-            raise ClauseFailed(f"GCS {_id(t2)}'s request for control, while GCS {_id(t)} held it with takeover "
-                               f"not allowed, was answered {_result(frame)}; expected MAV_RESULT_FAILED")
+            raise ClauseFailed(f"GCS {gcs_id(t2)}'s request for control, while GCS {gcs_id(t)} held it with takeover "
+                               f"not allowed, was answered {result_text(frame)}; expected MAV_RESULT_FAILED")
 
 
 @check("HO.CTL.07")
 def refused_request_forwarded(s: Session) -> None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
         t.mark()
         t2.mark()
-        sent = (cm.ACTION_REQUEST, 0.0, REQUEST_TIMEOUT, float(_id(t2)))
-        t2.note(f"GCS {_id(t)} is in control (takeover not allowed); GCS {_id(t2)} asks for control")
-        refusal = _ask(t2, cm.ACTION_REQUEST)
+        sent = (cm.ACTION_REQUEST, 0.0, REQUEST_TIMEOUT, float(gcs_id(t2)))
+        t2.note(f"GCS {gcs_id(t)} is in control (takeover not allowed); GCS {gcs_id(t2)} asks for control")
+        refusal = ask_control(t2, cm.ACTION_REQUEST)
         if refusal is not None and refusal.msg.result == CommandResult.ACCEPTED:
-            raise PreconditionFailed(f"GCS {_id(t2)}'s request was granted while GCS {_id(t)} held control "
+            raise PreconditionFailed(f"GCS {gcs_id(t2)}'s request was granted while GCS {gcs_id(t)} held control "
                                      "(HO.CTL.06 judges that)")
         forwarded = t.poll_for(FORWARDED, t.timings.default_timeout)
         if forwarded is None:
-            raise ClauseFailed(f"GCS {_id(t2)}'s request for control (answered {_result(refusal)}) did not reach "
-                               f"the owner, GCS {_id(t)}, within {t.reply_timeout:g} s; expected the same "
+            raise ClauseFailed(f"GCS {gcs_id(t2)}'s request for control (answered {result_text(refusal)}) did not reach "
+                               f"the owner, GCS {gcs_id(t)}, within {t.reply_timeout:g} s; expected the same "
                                "MAV_CMD_REQUEST_OPERATOR_CONTROL sent on to it")
         t.send(cm.command_ack(REQUEST_CONTROL, CommandResult.ACCEPTED, (forwarded.src_system,
                                                                         forwarded.src_component)))
         have = tuple(getattr(forwarded.msg, f"param{i}") for i in (1, 2, 3, 4))
         wrong = [f"param{i}={h:g} (sent {w:g})" for i, (h, w) in enumerate(zip(have, sent), 1) if h != w]
         if wrong:
-            raise ClauseFailed(f"GCS {_id(t2)}'s request reached the owner, GCS {_id(t)}, changed: "
+            raise ClauseFailed(f"GCS {gcs_id(t2)}'s request reached the owner, GCS {gcs_id(t)}, changed: "
                                f"{', '.join(wrong)}; expected the same command")
 
 
 @check("HO.CTL.08")
 def allowed_takeover_granted(s: Session) -> None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
-        t2.note(f"GCS {_id(t)} is in control (takeover not allowed); GCS {_id(t2)} asks for control")
-        first = _ask(t2, cm.ACTION_REQUEST)
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
+        t2.note(f"GCS {gcs_id(t)} is in control (takeover not allowed); GCS {gcs_id(t2)} asks for control")
+        first = ask_control(t2, cm.ACTION_REQUEST)
         if first is not None and first.msg.result == CommandResult.ACCEPTED:
-            raise PreconditionFailed(f"GCS {_id(t2)}'s request was granted while GCS {_id(t)} held control "
+            raise PreconditionFailed(f"GCS {gcs_id(t2)}'s request was granted while GCS {gcs_id(t)} held control "
                                      "(HO.CTL.06 judges that)")
         forwarded = t.poll_for(FORWARDED, t.timings.default_timeout)   # HO.CTL.07 judges it
         if forwarded is not None:   # "That owning GCS must ACK with MAV_RESULT_ACCEPTED"
             t.send(cm.command_ack(REQUEST_CONTROL, CommandResult.ACCEPTED,
                                   (forwarded.src_system, forwarded.src_component)))
-        _take(t, True, what=f"GCS {_id(t)}, the owner, re-requests control with takeover allowed",
+        take_control(t, True, what=f"GCS {gcs_id(t)}, the owner, re-requests control with takeover allowed",
               judged_by=None)
         t2.mark()
-        t2.note(f"GCS {_id(t2)} asks again")
-        frame = _ask(t2, cm.ACTION_REQUEST)
+        t2.note(f"GCS {gcs_id(t2)} asks again")
+        frame = ask_control(t2, cm.ACTION_REQUEST)
         if frame is None or frame.msg.result != CommandResult.ACCEPTED:
-            raise ClauseFailed(f"after the owner, GCS {_id(t)}, re-requested control with takeover allowed, "
-                               f"GCS {_id(t2)}'s request was answered {_result(frame)}; expected "
+            raise ClauseFailed(f"after the owner, GCS {gcs_id(t)}, re-requested control with takeover allowed, "
+                               f"GCS {gcs_id(t2)}'s request was answered {result_text(frame)}; expected "
                                "MAV_RESULT_ACCEPTED")
 
 
 @check("HO.CTL.09")
 def disallowed_takeover_refused(s: Session) -> None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
-        _take(t, True, what=f"GCS {_id(t)}, the owner, re-requests control with takeover allowed",
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
+        take_control(t, True, what=f"GCS {gcs_id(t)}, the owner, re-requests control with takeover allowed",
               judged_by=None)
-        _take(t, False, what=f"GCS {_id(t)} re-requests control with takeover disallowed again",
+        take_control(t, False, what=f"GCS {gcs_id(t)} re-requests control with takeover disallowed again",
               judged_by=None)
         t2.mark()
-        t2.note(f"GCS {_id(t2)} asks for control")
-        frame = _ask(t2, cm.ACTION_REQUEST)
+        t2.note(f"GCS {gcs_id(t2)} asks for control")
+        frame = ask_control(t2, cm.ACTION_REQUEST)
         if frame is None:
-            raise ClauseFailed(f"GCS {_id(t2)}'s request drew no COMMAND_ACK within {t2.reply_timeout:g} s; "
+            raise ClauseFailed(f"GCS {gcs_id(t2)}'s request drew no COMMAND_ACK within {t2.reply_timeout:g} s; "
                                "expected it refused")
         if frame.msg.result == CommandResult.ACCEPTED:
-            raise ClauseFailed(f"GCS {_id(t2)}'s request was granted (MAV_RESULT_ACCEPTED) after the owner, GCS "
-                               f"{_id(t)}, had allowed takeover and then disallowed it again; expected it refused")
+            raise ClauseFailed(f"GCS {gcs_id(t2)}'s request was granted (MAV_RESULT_ACCEPTED) after the owner, GCS "
+                               f"{gcs_id(t)}, had allowed takeover and then disallowed it again; expected it refused")
 
 
 # --- what a GCS not in control may do ------------------------------------------------------------
 
 @check("HO.CTL.10")
 def command_from_non_owner_not_in_control(s: Session) -> None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
         t2.mark()
         # param 1 = -1, param 2 = 0: "the current mission item", no reset; a state-changing
         # command that changes nothing should a target act on it
-        t2.note(f"GCS {_id(t)} is in control; GCS {_id(t2)} sends MAV_CMD_DO_SET_MISSION_CURRENT -1 (the "
+        t2.note(f"GCS {gcs_id(t)} is in control; GCS {gcs_id(t2)} sends MAV_CMD_DO_SET_MISSION_CURRENT -1 (the "
                 "current item, no reset)")
-        frame = _command(t2, Cmd.DO_SET_MISSION_CURRENT, -1.0, 0.0)
+        frame = send_command(t2, Cmd.DO_SET_MISSION_CURRENT, -1.0, 0.0)
         if frame is None:
-            raise ClauseFailed(f"a command from GCS {_id(t2)}, not in control, drew no COMMAND_ACK within "
+            raise ClauseFailed(f"a command from GCS {gcs_id(t2)}, not in control, drew no COMMAND_ACK within "
                                f"{t2.reply_timeout:g} s; expected MAV_RESULT_NOT_IN_CONTROL")
         if frame.msg.result == CommandResult.UNSUPPORTED:
             # a command the target does not have controls nothing: is it one it has?
-            t.note(f"GCS {_id(t)}, in control, sends the same command")
-            own = _command(t, Cmd.DO_SET_MISSION_CURRENT, -1.0, 0.0)
+            t.note(f"GCS {gcs_id(t)}, in control, sends the same command")
+            own = send_command(t, Cmd.DO_SET_MISSION_CURRENT, -1.0, 0.0)
             if own is None or own.msg.result == CommandResult.UNSUPPORTED:
-                raise PreconditionFailed(f"the target answers MAV_CMD_DO_SET_MISSION_CURRENT {_result(own)} even "
+                raise PreconditionFailed(f"the target answers MAV_CMD_DO_SET_MISSION_CURRENT {result_text(own)} even "
                                          "from the GCS in control: the clause has no command of the target's "
                                          "to send")
             t2.decided_by_frame(frame)
         if frame.msg.result != CommandResult.NOT_IN_CONTROL:
-            raise ClauseFailed(f"MAV_CMD_DO_SET_MISSION_CURRENT from GCS {_id(t2)}, not in control (GCS "
-                               f"{_id(t)} is), was answered {_result(frame)}; expected MAV_RESULT_NOT_IN_CONTROL")
+            raise ClauseFailed(f"MAV_CMD_DO_SET_MISSION_CURRENT from GCS {gcs_id(t2)}, not in control (GCS "
+                               f"{gcs_id(t)} is), was answered {result_text(frame)}; expected MAV_RESULT_NOT_IN_CONTROL")
 
 
 @check("HO.CTL.11")
 def mission_write_from_non_owner_refused(s: Session) -> str:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
         before = procedures.stored(t, MISSION)
         mine = plans.mission(2, variant=60)
         try:
@@ -468,7 +325,7 @@ def mission_write_from_non_owner_refused(s: Session) -> str:
             return _judge_foreign_writes(t, t2, mine)
         finally:
             keep = t.decided_by
-            t.note(f"afterwards: GCS {_id(t)}, still in control, puts back the plan it found")
+            t.note(f"afterwards: GCS {gcs_id(t)}, still in control, puts back the plan it found")
             if before:
                 procedures.upload(t, before, MISSION)
             else:
@@ -480,57 +337,57 @@ def _judge_foreign_writes(t: Tester, t2: Tester, mine: list) -> str:
     theirs = plans.mission(3, variant=61)
     answers = []
     t2.mark()
-    t2.note(f"GCS {_id(t)} is in control and holds a 2-item plan; GCS {_id(t2)} sends MISSION_COUNT 3")
+    t2.note(f"GCS {gcs_id(t)} is in control and holds a 2-item plan; GCS {gcs_id(t2)} sends MISSION_COUNT 3")
     t2.send(m.count_message(len(theirs), MISSION, t2.target))
     reply = t2.poll_for(request(mission_type=MT) | ack(mission_type=MT), t2.timings.default_timeout)
     if reply is not None and reply.msg._type != "MISSION_ACK":
         t2.send(m.ack_message(MissionResult.OPERATION_CANCELLED, MISSION, t2.target))
-        raise ClauseFailed(f"MISSION_COUNT from GCS {_id(t2)}, not in control, started an upload "
+        raise ClauseFailed(f"MISSION_COUNT from GCS {gcs_id(t2)}, not in control, started an upload "
                            f"({reply.msg._type} {reply.msg.seq}); expected it refused")
     if reply is not None and reply.msg.type == MissionResult.ACCEPTED:
-        raise ClauseFailed(f"MISSION_COUNT from GCS {_id(t2)}, not in control, was answered "
+        raise ClauseFailed(f"MISSION_COUNT from GCS {gcs_id(t2)}, not in control, was answered "
                            "MAV_MISSION_ACCEPTED; expected it refused")
     answers.append(f"MISSION_COUNT: {'no answer' if reply is None else procedures.result_name(reply.msg.type)}")
-    t2.note(f"GCS {_id(t2)} sends MISSION_CLEAR_ALL for the mission plan")
+    t2.note(f"GCS {gcs_id(t2)} sends MISSION_CLEAR_ALL for the mission plan")
     t2.send(m.clear_all_message(MISSION, t2.target))
     reply = t2.poll_for(ack(mission_type=MT), t2.timings.default_timeout)
     if reply is not None and reply.msg.type == MissionResult.ACCEPTED:
-        raise ClauseFailed(f"MISSION_CLEAR_ALL from GCS {_id(t2)}, not in control, was answered "
+        raise ClauseFailed(f"MISSION_CLEAR_ALL from GCS {gcs_id(t2)}, not in control, was answered "
                            "MAV_MISSION_ACCEPTED; expected it refused")
     answers.append(f"MISSION_CLEAR_ALL: {'no answer' if reply is None else procedures.result_name(reply.msg.type)}")
     procedures.require_same_plan(procedures.stored(t, MISSION), mine,
-                                 f"after mission writes from GCS {_id(t2)}, not in control", t.form)
+                                 f"after mission writes from GCS {gcs_id(t2)}, not in control", t.form)
     return "refused: " + "; ".join(answers)
 
 
 @check("HO.CTL.12")
 def reads_from_non_owner_answered(s: Session) -> str | None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t)
-        t2.note(f"GCS {_id(t)} is in control; GCS {_id(t2)} downloads the mission plan")
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t)
+        t2.note(f"GCS {gcs_id(t)} is in control; GCS {gcs_id(t2)} downloads the mission plan")
         t2.mark()
         t2.send(m.request_list_message(MISSION, t2.target))
         reply = t2.poll_for(msg("MISSION_COUNT", mission_type=MT) | ack(mission_type=MT),
                             t2.timings.default_timeout)
         if reply is None or reply.msg._type == "MISSION_ACK":
             said = "nothing" if reply is None else f"MISSION_ACK {procedures.result_name(reply.msg.type)}"
-            raise ClauseFailed(f"MISSION_REQUEST_LIST from GCS {_id(t2)}, not in control, was answered {said}; "
+            raise ClauseFailed(f"MISSION_REQUEST_LIST from GCS {gcs_id(t2)}, not in control, was answered {said}; "
                                "expected MISSION_COUNT (a download changes nothing)")
         t2.send(m.ack_message(MissionResult.OPERATION_CANCELLED, MISSION, t2.target))
-        t2.note(f"GCS {_id(t2)} sends MAV_CMD_REQUEST_MESSAGE (HEARTBEAT), a telemetry request")
-        frame = _command(t2, Cmd.REQUEST_MESSAGE)
+        t2.note(f"GCS {gcs_id(t2)} sends MAV_CMD_REQUEST_MESSAGE (HEARTBEAT), a telemetry request")
+        frame = send_command(t2, Cmd.REQUEST_MESSAGE)
         if frame is None:   # unanswered: is it answered to anyone?
             keep = t2.decided_by
-            t.note(f"GCS {_id(t)}, in control, sends the same request")
-            if _command(t, Cmd.REQUEST_MESSAGE) is None:
+            t.note(f"GCS {gcs_id(t)}, in control, sends the same request")
+            if send_command(t, Cmd.REQUEST_MESSAGE) is None:
                 return ("MAV_CMD_REQUEST_MESSAGE is acknowledged to no GCS, in control or not: judged by the "
                         "download alone")
             t2.decided_by = keep
         if frame is None or frame.msg.result == CommandResult.NOT_IN_CONTROL:
-            raise ClauseFailed(f"MAV_CMD_REQUEST_MESSAGE from GCS {_id(t2)}, not in control, was answered "
-                               f"{_result(frame)}" + ("" if frame is not None else
-                                                      f" (the GCS in control, GCS {_id(t)}, got an answer)")
+            raise ClauseFailed(f"MAV_CMD_REQUEST_MESSAGE from GCS {gcs_id(t2)}, not in control, was answered "
+                               f"{result_text(frame)}" + ("" if frame is not None else
+                                                      f" (the GCS in control, GCS {gcs_id(t)}, got an answer)")
                                + "; expected an answer as to any GCS (not MAV_RESULT_NOT_IN_CONTROL)")
         return None
 
@@ -548,21 +405,21 @@ def _loss_wait(s: Session) -> float:
 
 @check("HO.CTL.13")
 def owner_loss_announced(s: Session) -> None:
-    t, t2 = _start(s)
-    with _restoring(s):
-        _take(t2)
+    t, t2 = start_uncontrolled(s)
+    with restoring(s):
+        take_control(t2)
         wait = _loss_wait(s)
         t2.node.heartbeats = False
         t.mark()
-        t.note(f"GCS {_id(t2)}, in control, falls silent: no HEARTBEAT or anything else from it (watched for at "
+        t.note(f"GCS {gcs_id(t2)}, in control, falls silent: no HEARTBEAT or anything else from it (watched for at "
                f"most {wait * s.scale:g} s)")
         frame = t.poll_for(msg("CONTROL_STATUS", gcs_main=0), wait, forced=True)
         if frame is None:
-            last = _latest_status(t)
+            last = latest_status(t)
             if last is not None:
-                _shown(t, last)
-            raise ClauseFailed(f"GCS {_id(t2)}, in control, sent nothing for {wait * s.scale:g} s, and no "
+                shown(t, last)
+            raise ClauseFailed(f"GCS {gcs_id(t2)}, in control, sent nothing for {wait * s.scale:g} s, and no "
                                "CONTROL_STATUS with gcs_main=0 came"
-                               + (f" (the last was {_status_text(last)})" if last is not None else "")
+                               + (f" (the last was {status_text(last)})" if last is not None else "")
                                + "; expected one saying the vehicle has no owner")
-        _shown(t, frame)
+        shown(t, frame)
