@@ -13,8 +13,8 @@ judges, chosen by transport:
   that made it, against the frames that came in during that call: a change with no cause in
   that call (a request, a release, a write from the GCS allowed to make it) had no cause.
   Times are the vehicle's own (virtual), so the bounds are exact.
-- `WireControl` (external targets: udp:, tcp:, serial:): only what the wire shows. Which GCSs may own control
-  follows from the answers our GCSs got (ACCEPTED to a request: that GCS; to a release:
+- `WireControl` (wire_control.py; external targets: udp:, tcp:, serial:): only what the wire
+  shows. Which GCSs may own control follows from the answers our GCSs got (ACCEPTED to a request: that GCS; to a release:
   nobody; an unanswered one: either), widened wherever the target could have dropped a silent
   owner; after every step the probe waits (bounded, on a clean link) for a CONTROL_STATUS,
   whose gcs_main must be one of them. A mission write ACCEPTED while only another GCS can be
@@ -32,13 +32,12 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable
+from typing import Any, Callable
 
 from mavconform.conformance.target_uri import SUITE_CONTROL
 from mavconform.reference_impl.handover import control_messages as cm
 from mavconform.reference_impl.handover.control_client import ClientConfig
 from mavconform.reference_impl.handover.control_manager import ManagerConfig
-from mavconform.reference_impl.handover.control_results import ControlOperation, ControlOutcome, ControlResult
 from mavconform.reference_impl.handover.control_transitions import ControlState
 from mavconform.reference_impl.mission.items import PLAN_TYPES
 from mavconform.reference_impl.wire.dialect import mavlink as _d
@@ -487,73 +486,3 @@ class ControlWatch:
     def _break(self, invariant: str, detail: str, at: float) -> None:
         if len(self.broken) < 16:
             self.broken.append(Broken(invariant, detail, at))
-
-
-# --- over the wire -------------------------------------------------------------------------
-
-class WireControl:
-    """Which GCSs may own control, from the answers our GCSs got and the CONTROL_STATUS the
-    target sends (UDP targets: nothing else can be seen). `possible` is None until the first
-    CONTROL_STATUS is heard."""
-
-    def __init__(self, name: Callable[[int], str] = lambda s: f"GCS {s}") -> None:
-        self.name = name
-        self.possible: set[int] | None = None
-        self.because = "the last CONTROL_STATUS"
-        self.answered_at = -math.inf       # the time of the last answer that moved `possible`
-        self.by_answer = False             # `possible` was last set by an ACCEPTED answer
-
-    def observed(self, gcs_main: int) -> None:
-        self.possible = {gcs_main}
-        self.because, self.by_answer = "the last CONTROL_STATUS", False
-
-    def widen(self, sysids: Iterable[int], because: str) -> None:
-        """Control may have gone to one of `sysids` (0: nobody), e.g. an unanswered request,
-        or an owner that may have been dropped while its HEARTBEATs did not get through."""
-        if self.possible is not None and not set(sysids) <= self.possible:
-            self.possible |= set(sysids)
-            self.because = f"{self.because}, then {because}"
-
-    def result(self, sysid: int, result: ControlResult, now: float) -> None:
-        """Fold in one control operation's result (ours, user or answer)."""
-        op, outcome = result.operation, result.outcome
-        releases = op in (ControlOperation.RELEASE, ControlOperation.ANSWER_RELEASE)
-        who = self.name(sysid)
-        if outcome is ControlOutcome.GRANTED and not releases:
-            self.possible, self.by_answer = {sysid}, True
-            self.because = f"the ACCEPTED answer to {who}'s {op.value}"
-            self.answered_at = now
-        elif outcome is ControlOutcome.RELEASED:
-            self.possible = ((self.possible or set()) - {sysid}) | {0}
-            self.by_answer = True
-            self.because = f"the ACCEPTED answer to {who}'s {op.value}"
-            self.answered_at = now
-        elif outcome is ControlOutcome.TIMEOUT:
-            self.widen([0] if releases else [sysid], f"{who}'s unanswered {op.value}")
-        # refused, not in control, rejected: nothing changed hands
-
-    def judge(self, gcs_main: int, secondary: Iterable[int]) -> tuple[str, str] | None:
-        """(invariant, detail) if the CONTROL_STATUS heard cannot be, else None; then it is
-        what the target holds."""
-        others = [s for s in secondary if s]
-        if others:
-            return "two-owners", (f"CONTROL_STATUS names GCS {gcs_main} as gcs_main and {others} as "
-                                  "secondary owners: more than one GCS in control")
-        possible = self.possible
-        if possible is not None and gcs_main not in possible:
-            heard = self.name(gcs_main) if gcs_main else "nobody"
-            could = " or ".join(sorted(self.name(s) if s else "nobody" for s in possible))
-            if self.by_answer:   # over the wire, which of the two is wrong cannot be told
-                return "control-status-lies", (
-                    f"CONTROL_STATUS says {heard} is in control, but after {self.because} only {could} "
-                    "can be: the status or the answer is wrong")
-            return "owner-without-request", (
-                f"CONTROL_STATUS says {heard} is in control, but after {self.because} only {could} can "
-                "be: no request, release or owner loss explains the change")
-        self.observed(gcs_main)
-        return None
-
-    def may_write(self, sysid: int) -> bool:
-        """Could `sysid` be allowed to write now (it may own control, or nobody may, and the
-        target may be open while nobody is in control)?"""
-        return self.possible is None or sysid in self.possible or 0 in self.possible

@@ -49,7 +49,8 @@ from mavconform.reference_impl.net.sim import CaptureHook
 from mavconform.reference_impl.vehicle import VehicleNode
 
 from .connection import TargetConnection
-from .control import HANDOVER_CONTROL, ControlRules, ControlWatch, WireControl
+from .control import HANDOVER_CONTROL, ControlRules, ControlWatch
+from .wire_control import WireControl
 from .faults import install
 from .gcs import FuzzGcs
 from .scope import Scope
