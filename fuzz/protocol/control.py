@@ -14,8 +14,8 @@ judges, chosen by transport:
   that call (a request, a release, a write from the GCS allowed to make it) had no cause.
   Times are the vehicle's own (virtual), so the bounds are exact.
 - `WireControl` (wire_control.py; external targets: udp:, tcp:, serial:): only what the wire
-  shows. Which GCSs may own control follows from the answers our GCSs got (ACCEPTED to a request: that GCS; to a release:
-  nobody; an unanswered one: either), widened wherever the target could have dropped a silent
+  shows. Which GCSs may own control follows from the answers our GCSs got (ACCEPTED to a
+  request: that GCS; to a release: nobody; an unanswered one: either), widened wherever the target could have dropped a silent
   owner; after every step the probe waits (bounded, on a clean link) for a CONTROL_STATUS,
   whose gcs_main must be one of them. A mission write ACCEPTED while only another GCS can be
   in control was executed for a non-owner. The owner-loss timeout of a remote target is not
