@@ -4,9 +4,11 @@ Real autopilots stream hundreds of frames a second (PX4's fixed-wing SIH ~360/s)
 them messages our dialect lacks. Here every time the vehicle sends anything (a reply, a
 HEARTBEAT) a burst of telemetry frames follows it in the same flush, so the burst reaches
 the tester's socket right behind the message it follows: against a small receive buffer the
-kernel keeps that message and drops most of the burst, every time, with no real-time race
-(the driver reads the tester's socket before each flush). The frames are numbered by the
-vehicle's own encoder, so a mutant's packet sequence stays what the mutant makes it.
+kernel keeps that message and drops most of the burst. Where two flushes come before the
+tester's next read (the driver reads when select wakes it; a busy machine), one gap between
+two frames we read holds more than 255 dropped frames and the 8-bit sequence wraps. The
+frames are numbered by the vehicle's own encoder, so a mutant's packet sequence stays what
+the mutant makes it.
 """
 
 from __future__ import annotations
