@@ -43,14 +43,16 @@ UNCONFIRMED after), the refuge is chosen with the battery the flight has left, a
 `screen` refuses every GCS's state-changing message except a control request from a known GCS
 covering the vehicle; its grant (`control_changed`) is TAKEN_BACK (on_mission, every region
 seen afresh, as at the start of a flight); landing at the refuge (`stop`) is LANDED (on_load).
+
+Its load is in mission_computer_config.py, what it reports in mission_computer_reports.py, and
+a handover's steps in mission_computer_sequence.py.
 """
 
 from __future__ import annotations
 
-import math
 from collections import deque
-from dataclasses import dataclass, field
-from typing import Any, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Iterable, Sequence
 
 from ..mission.actions import Send
 from ..mission.constants import POSITIONAL_COMMANDS
@@ -66,158 +68,17 @@ from .emergency_procedure import screen as emergency_screen
 from .emergency import Trigger
 from .geo import GeoPoint
 from .hysteresis import Edge, Latch, Presence, Sense, sense_of, sense_when
-from .mission_computer_transitions import (COMMITTED, MC_TABLE, PHASE_STEP, PHASE_TRANSITIONS,
-                                           HandoverOutcome, HandoverPhase, McEvent, McState, PhaseEvent)
-from .regions import Circle, Intersection, OwnedWaypoints, Polygon, RegionMethod, WaypointOwnership
+from .mission_computer_config import THESIS_CHECK_PERIOD, MissionComputerConfig, critical_path_budget
+from .mission_computer_reports import (MAX_RESULTS, Action, HandoverFinished, HandoverResult, HandoverStarted,
+                                       WithdrawTakeover)
+from .mission_computer_sequence import HandoverSequence, _Attempt
+from .mission_computer_transitions import MC_TABLE, HandoverOutcome, McEvent, McState, PhaseEvent
+from .regions import Intersection, OwnedWaypoints, RegionMethod
 from .waypoints import waypoint_reached
 
 __all__ = ["EmergencyConfig", "EmergencyEnded", "EmergencyStarted", "HandoverFinished", "HandoverResult",
-           "HandoverStarted", "MissionComputer", "MissionComputerConfig", "RevokeControl", "WithdrawTakeover",
-           "critical_path_budget", "mission_waypoints"]
-
-THESIS_CHECK_PERIOD = 0.05   # s: "The third task runs each 50 milliseconds" (4.3.2)
-MAX_RESULTS = 1000
-
-
-@dataclass(frozen=True)
-class MissionComputerConfig:
-    """What the mission computer is loaded with (4.3.1: "GCS Parameters; GCS Geofences").
-
-    `coverages` maps each GCS's system id to its coverage under one region method (a
-    `Circle`, a `Polygon`, or the `OwnedWaypoints` it owns); a mapping is stored as sorted
-    pairs so the config stays hashable. The default bound: see docs/handover.md, "Bound".
-    """
-
-    parent: int
-    coverages: Any                        # Mapping[int, Coverage] in, tuple of pairs kept
-    check_period: float = THESIS_CHECK_PERIOD
-    dwell: float = 1.0                    # s inside (and outside) before an entry (exit) counts
-    margin_m: float = 0.0                 # geographic methods: the Schmitt band around the edge
-    acceptance_radius_m: float = 10.0     # waypoint method: "reached" within this distance
-    bound: float = 40.0                   # s: every handover ends within this of its start
-    closing_timeout: float | None = None  # s of the bound kept for steps 5-6 (None: bound / 4)
-    resend_period: float = 1.0            # s between resends of the invitation / connect notice
-    resends: int = 5                      # resends of each at most
-    emergency: EmergencyConfig | None = None   # the emergency procedure (None: off, as before)
-
-    def __post_init__(self) -> None:
-        pairs = self.coverages.items() if isinstance(self.coverages, Mapping) else self.coverages
-        pairs = tuple(sorted((int(k), v) for k, v in pairs))
-        object.__setattr__(self, "coverages", pairs)
-        ids = [k for k, _ in pairs]
-        if len(ids) < 2:
-            raise ValueError("a handover needs coverage for at least two GCSs")
-        if len(set(ids)) != len(ids) or not all(1 <= k <= 255 for k in ids):
-            raise ValueError(f"GCS system ids must be distinct, in 1..255: {ids}")
-        if self.parent not in ids:
-            raise ValueError(f"the parent GCS {self.parent} has no coverage")
-        kinds = {type(v) for _, v in pairs}
-        geographic = kinds <= {Circle, Polygon, Intersection}
-        if not (geographic or kinds == {OwnedWaypoints}):
-            raise ValueError("every GCS's coverage must be of one region method: circles/polygons, or waypoints, "
-                             f"got {sorted(k.__name__ for k in kinds)}")
-        if not geographic:
-            WaypointOwnership.from_coverages({str(k): v for k, v in pairs})   # a waypoint owned twice
-            if self.margin_m:
-                raise ValueError("margin_m is for circles and polygons; the waypoint method has the "
-                                 "acceptance radius")
-        for name in ("check_period", "resend_period", "bound"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise ValueError(f"{name} must be a positive number of seconds, got {getattr(self, name)!r}")
-        for name in ("dwell", "margin_m", "acceptance_radius_m"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
-                raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
-        closing = self.closing
-        if not 0 < closing < self.bound:
-            raise ValueError(f"closing_timeout {closing!r} must be more than 0 and less than the bound {self.bound!r}")
-        if self.resends < 0:
-            raise ValueError("resends must be >= 0")
-        if self.emergency is not None and not isinstance(self.emergency, EmergencyConfig):
-            raise TypeError(f"emergency must be an EmergencyConfig or None, got {self.emergency!r}")
-
-    @property
-    def closing(self) -> float:
-        return self.bound / 4 if self.closing_timeout is None else self.closing_timeout
-
-    @property
-    def commit_timeout(self) -> float:
-        """Seconds from a handover's start by which control must have moved, or it aborts."""
-        return self.bound - self.closing
-
-    @property
-    def method(self) -> RegionMethod:
-        kinds = {type(v) for _, v in self.coverages}
-        if kinds == {OwnedWaypoints}:
-            return RegionMethod.WAYPOINTS
-        return RegionMethod.CIRCLE if kinds == {Circle} else RegionMethod.POLYGON
-
-    @property
-    def gcs_ids(self) -> tuple[int, ...]:
-        return tuple(k for k, _ in self.coverages)
-
-    def coverage(self, sysid: int) -> Any:
-        return dict(self.coverages)[sysid]
-
-
-# --- what the mission computer reports -------------------------------------------------------
-@dataclass(frozen=True)
-class WithdrawTakeover:
-    """Ask the system manager to end a forwarded request from, or a takeover window for,
-    `requester` now (an aborted handover must not complete later)."""
-
-    requester: int
-    reason: str
-
-
-@dataclass(frozen=True)
-class HandoverStarted:
-    commander: int
-    partner: int
-    region: str
-    at: float
-
-
-@dataclass(frozen=True)
-class HandoverResult:
-    outcome: HandoverOutcome
-    commander: int                 # the commander when the handover started
-    partner: int
-    owner: int                     # gcs_main when it ended
-    started: float
-    finished: float
-    steps: tuple[tuple[int, float], ...]   # (thesis step, first seen) in order of step
-    detail: str = ""
-
-    @property
-    def duration(self) -> float:
-        return self.finished - self.started
-
-
-@dataclass(frozen=True)
-class HandoverFinished:
-    result: HandoverResult
-
-
-Action = (Send | WithdrawTakeover | HandoverStarted | HandoverFinished
-          | EmergencyStarted | RevokeControl | EmergencyEnded)
-
-
-def critical_path_budget(manager: Any, client: Any, *, resend_period: float = 1.0, resends: int = 5,
-                         latency: float = 0.05) -> tuple[float, float]:
-    """(commit, closing): how long steps 1-4 and 5-6 take when every message on the critical
-    path gets through only on its last resend (each hop `latency` one way). `manager` is the
-    vehicle's ManagerConfig, `client` the GCSs' ClientConfig. The default bound covers this
-    with the engines' defaults (docs/handover.md, "Bound"; a test holds it to that)."""
-    last = client.ack_timeout * client.max_retries            # a GCS command's last resend
-    commit = (resend_period * resends                         # 1: invitation
-              + last                                          # 2: the partner's request
-              + manager.notify_timeout * manager.notify_retries   # 2: the forward to the commander
-              + last                                          # 3: the commander's allow
-              + manager.status_period + last                  # 4: CONTROL_STATUS, then the request again
-              + 6 * latency)
-    closing = max(resend_period * resends + latency,          # 5: connect notice and its ACK
-                  manager.status_period + last + latency)     # 6: CONTROL_STATUS, then the release
-    return commit, closing
+           "HandoverStarted", "MissionComputer", "MissionComputerConfig", "RevokeControl", "THESIS_CHECK_PERIOD",
+           "WithdrawTakeover", "critical_path_budget", "mission_waypoints"]
 
 
 def mission_waypoints(items: Iterable[MissionItem]) -> tuple[tuple[int, GeoPoint], ...]:
@@ -251,28 +112,7 @@ class _Watch:
         return None
 
 
-@dataclass
-class _Attempt:
-    commander: int
-    partner: int
-    watch: _Watch
-    started: float
-    commit_by: float
-    end_by: float
-    phase: HandoverPhase = HandoverPhase.INVITING
-    steps: dict[int, float] = field(default_factory=dict)
-    resend_at: float | None = None
-    resends_left: int = 0
-    sent: int = 0                   # invitations / notices sent, for `confirmation`
-    released_at: float | None = None   # the commander released before the grant (steps 3 and 6)
-    notice_sent: bool = False
-
-    @property
-    def committed(self) -> bool:
-        return self.phase in COMMITTED
-
-
-class MissionComputer:
+class MissionComputer(HandoverSequence):
     """Vehicle-side handover: `observe` positions, `handle` frames, `control_changed` events,
     `poll` timers; send and apply what they return."""
 
@@ -528,82 +368,6 @@ class MissionComputer:
                 w.used = True
                 return self._start(w, partner, now)
         return []
-
-    # --- the sequence ---------------------------------------------------------------------
-    def _start(self, w: _Watch, partner: int, now: float) -> list[Action]:
-        cfg = self.config
-        self._move(McEvent.HANDOVER_DUE)
-        a = self.attempt = _Attempt(self.commander, partner, w, now, now + cfg.commit_timeout, now + cfg.bound)
-        a.steps[1] = now
-        a.resends_left = cfg.resends
-        a.resend_at = now + cfg.resend_period if cfg.resends else None
-        text = cm.statustext(_d.MAV_SEVERITY_INFO, f"Handover {a.commander}->{partner} started")
-        return [HandoverStarted(a.commander, partner, w.name, now), self._notice(a, now), Send(text)]
-
-    def _notice(self, a: _Attempt, now: float) -> Send:
-        """Step 1's invitation before the commit, step 4's connect notice after it: the
-        operator-control command, to the partner, naming the partner (param4). Param 3 is
-        the time left (clamped to the XML's 3..60 s): the partner's request timeout."""
-        left = (a.end_by if a.committed else a.commit_by) - now
-        timeout = min(max(left, cm.TIMEOUT_MIN), cm.TIMEOUT_MAX)
-        msg = cm.request_command((a.partner, 0), cm.ACTION_REQUEST, False, timeout, a.partner,
-                                 confirmation=min(a.sent, 255))
-        a.sent += 1
-        return Send(msg, (a.partner, 0))
-
-    def _commit(self, now: float) -> list[Action]:
-        a = self.attempt
-        self._step(PhaseEvent.GRANTED, now)
-        if a.released_at is not None:
-            self._step(PhaseEvent.COMMANDER_DISCONNECTED, a.released_at)
-        a.sent, a.notice_sent = 0, True
-        a.resends_left = self.config.resends
-        a.resend_at = now + self.config.resend_period if self.config.resends else None
-        return [self._notice(a, now)]
-
-    def _step(self, event: PhaseEvent, now: float) -> None:
-        a = self.attempt
-        old = a.phase
-        a.phase = next_state(PHASE_TRANSITIONS, old, event, "handover sequence")
-        if a.phase is not old:
-            self._record_move(old, event, a.phase)
-        step = {PhaseEvent.PARTNER_CONFIRMED: 5, PhaseEvent.COMMANDER_DISCONNECTED: 6}.get(event, PHASE_STEP[a.phase])
-        if a.phase is not old or event in (PhaseEvent.PARTNER_CONFIRMED, PhaseEvent.COMMANDER_DISCONNECTED):
-            a.steps.setdefault(step, now)
-
-    def _finish_if_done(self, now: float) -> list[Action]:
-        a = self.attempt
-        if a is not None and a.phase is HandoverPhase.DONE:
-            return self._finish(HandoverOutcome.COMPLETED, now)
-        return []
-
-    def _finish(self, outcome: HandoverOutcome, now: float, detail: str = "", *,
-                event: McEvent | None = None) -> list[Action]:
-        """End the handover under way with `outcome`; the mission computer moves by `event`
-        (default: the outcome's own, back to on_mission)."""
-        a = self.attempt
-        assert a is not None
-        self.attempt = None
-        self._move(event or {HandoverOutcome.COMPLETED: McEvent.COMPLETED,
-                             HandoverOutcome.UNCONFIRMED: McEvent.UNCONFIRMED,
-                             HandoverOutcome.ABORTED: McEvent.ABORTED}[outcome])
-        result = HandoverResult(outcome, a.commander, a.partner, self.commander, a.started, now,
-                                tuple(sorted(a.steps.items())), detail)
-        if len(self.results) < MAX_RESULTS:
-            self.results.append(result)
-        out: list[Action] = []
-        if outcome is HandoverOutcome.ABORTED:
-            out.append(WithdrawTakeover(a.partner, detail))
-        severity = _d.MAV_SEVERITY_INFO if outcome is HandoverOutcome.COMPLETED else _d.MAV_SEVERITY_WARNING
-        out += [HandoverFinished(result),
-                Send(cm.statustext(severity, f"Handover {a.commander}->{a.partner} {outcome.value}"))]
-        if event is not None:
-            return out
-        if self._ending:
-            self._end_mission()
-        else:
-            out += self._maybe_start(now)
-        return out
 
     # --- the emergency procedure ------------------------------------------------------------
     def _emergency(self, trigger: Trigger, now: float, commander: int) -> list[Action]:
