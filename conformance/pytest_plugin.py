@@ -187,8 +187,8 @@ def mavlink_session(request: pytest.FixtureRequest):
         from . import readiness   # as `mavconform run` does: streams, forms, a target done booting
         session.identity["prepared"] = readiness.prepare(session.t).line()
         yield session
-        from .runner import InterruptGuard
-        with InterruptGuard() as guard:   # a second signal must not cut the restore short
+        from .runner import run_guard
+        with run_guard() as guard:   # a second signal must not cut the restore short
             guard.hold()
             restore = _restore(session, snapshot) if snapshot is not None else {
                 "status": "skipped", "detail": "could not read the plans before the run"}

@@ -16,14 +16,12 @@ cut the restore short: it is noted and honoured once the reports are written.
 
 from __future__ import annotations
 
-import os
-import signal
-import threading
 import time
 import traceback
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable
 
+from mavconform.reference_impl.interrupts import INTERRUPT_SIGNALS, InterruptGuard
 from mavconform.reference_impl.mission import messages as m
 from mavconform.reference_impl.mission.constants import MissionResult
 from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionItem, MissionType
@@ -94,68 +92,14 @@ def _text(exc: BaseException) -> str:
     return exc.args[0] if len(exc.args) == 1 and isinstance(exc.args[0], Measured) else str(exc)
 
 
-class InterruptGuard:
-    """SIGINT/SIGTERM as a guarded run wants them: while the clauses run, the first one
-    raises KeyboardInterrupt (the run stops at the current clause); from then on, and from
-    `hold()` (putting the plans back, writing the reports), a signal is only noted, since
-    cutting those short would leave the target with the suite's plans and an unreadable
-    capture, and every wait in them is bounded anyway. The caller honours a noted signal
-    after the reports. `atomic` wraps a hook (the capture writer) that a signal must not
-    split. Signals can only be handled in the main thread: elsewhere the guard does nothing."""
+RESTORING_NOTE = ("mavconform: putting the target's plans back and writing the reports first; "
+                  "stopping after that")
 
-    def __init__(self, signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> None:
-        self.signals = signals
-        self.received: list[str] = []   # names, in order
-        self.holding = False
-        self._atomic = 0
-        self._pending = False
-        self._previous: dict[int, Any] = {}
 
-    def __enter__(self) -> "InterruptGuard":
-        if threading.current_thread() is threading.main_thread():
-            for signum in self.signals:
-                self._previous[signum] = signal.signal(signum, self._handle)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for signum, previous in self._previous.items():
-            signal.signal(signum, previous)
-        self._previous.clear()
-
-    def hold(self) -> None:
-        """From now on signals are noted, never raised."""
-        self.holding = True
-
-    @property
-    def first(self) -> str | None:
-        return self.received[0] if self.received else None
-
-    def _handle(self, signum: int, frame: object) -> None:
-        self.received.append(signal.Signals(signum).name)
-        if self.holding:
-            _say("mavconform: putting the target's plans back and writing the reports first; "
-                 "stopping after that")
-        elif self._atomic:
-            self._pending = True
-        else:
-            self.holding = True     # one interrupt per run: a second must not cut the restore
-            raise KeyboardInterrupt
-
-    def atomic(self, hook: Callable[..., None]) -> Callable[..., None]:
-        def guarded(*args: Any, **kwargs: Any) -> None:
-            self._atomic += 1
-            try:
-                hook(*args, **kwargs)
-            finally:
-                self._atomic -= 1
-            if self._pending and not self._atomic and not self.holding:
-                self._pending = False
-                self.holding = True
-                raise KeyboardInterrupt
-        mark = getattr(hook, "mark", None)
-        if mark is not None:   # the capture's clause markers are writes too
-            guarded.mark = self.atomic(mark)  # type: ignore[attr-defined]
-        return guarded
+def run_guard(signals: tuple[int, ...] = INTERRUPT_SIGNALS) -> InterruptGuard:
+    """The guard of a run (reference_impl/interrupts.py): the first signal stops it at the
+    current clause; a later one waits for the restore and the reports, and says so."""
+    return InterruptGuard(signals, held_note=RESTORING_NOTE)
 
 
 def _mark(session: Session, label: str, level: str = "info") -> None:
@@ -163,14 +107,6 @@ def _mark(session: Session, label: str, level: str = "info") -> None:
     mark = getattr(session.capture, "mark", None)
     if mark is not None:
         mark(label, clock=session.driver.clock, level=level)
-
-
-def _say(line: str) -> None:
-    """One line on stderr from a signal handler: os.write, since print may be mid-line."""
-    try:
-        os.write(2, (line + "\n").encode())
-    except OSError:
-        pass
 
 
 def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnResult | None = None,

@@ -22,7 +22,7 @@ from mavconform.reference_impl.net.sim import CaptureHook
 from . import catalogue, document, expectations, gating
 from .clause import Clause
 from .outcome import ClauseResult
-from .runner import InterruptGuard, OnResult, RunOutcome, interrupted_before_start, run_clauses
+from .runner import InterruptGuard, OnResult, RunOutcome, interrupted_before_start, run_clauses, run_guard
 from .session import Session
 from .target_uri import TargetUri, load_handover_scenario, parse_target
 
@@ -124,7 +124,7 @@ def guarded_run(options: document.RunOptions, expected: expectations.Expectation
     another protocol's bytes (MSP), MAVLink's if None."""
     started = dt.datetime.now(dt.timezone.utc)
     on_result = _judged_live(on_result, expected)
-    with InterruptGuard(stop_signals) as guard:
+    with run_guard(stop_signals) as guard:
         mcap = McapCapture(report_dir / CAPTURE_NAME, frames=frames) if capture and report_dir is not None else None
         try:
             run = clauses(guard, guard.atomic(mcap) if mcap is not None else None, on_result)

@@ -38,13 +38,14 @@ from typing import Any, Callable, Iterator
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.mission.messages import is_vehicle_heartbeat
 from mavconform.conformance.harness.exchange import MAX_EVENTS, message_fields
+from mavconform.reference_impl.interrupts import InterruptGuard
 from mavconform.reference_impl.net.capture import McapCapture
 from mavconform.reference_impl.net.sim import CaptureRecord
 from mavconform.reference_impl.wire.codec import FrameDecoder
 
 from .case import Case, Violation, save_case
 from .outcomes import (DEATH_KINDS, SearchInterrupted, TargetUnresponsive, ToolError, ToolFailure,
-                       InterruptWatch, caused_by_interrupt, interrupts_noted, interrupts_watched)
+                       caused_by_interrupt)
 
 MODES = ("protocol", "frames")
 SHRINK_LIMIT = 60.0          # s Hypothesis may spend shrinking one campaign's findings, at most
@@ -153,12 +154,12 @@ def run_campaign(options: CampaignOptions,
     """Search, then save what was found. Raises `TargetUnresponsive` (no HEARTBEAT at the
     start), `ToolError` (an exception of ours, with the case that caused it) and, after an
     interrupt, `CampaignInterrupted` (what was found is saved; the result says so)."""
-    with interrupts_watched() as watch:
-        return _run_campaign(options, on_progress, watch)
+    with InterruptGuard(once=False) as guard:   # saving may be interrupted too, and says so
+        return _run_campaign(options, on_progress, guard)
 
 
 def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], None] | None,
-                  watch: InterruptWatch) -> CampaignResult:
+                  guard: InterruptGuard) -> CampaignResult:
     from mavconform.conformance.target_uri import parse_target
 
     uri = parse_target(options.target)   # a bad URI is the user's mistake: say so before searching
@@ -178,7 +179,7 @@ def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], No
     ring = None if uri.in_process else RingCapture()
 
     def example_done(units: int) -> None:
-        watch.check()                # an interrupt Python dropped (see interrupts_watched)
+        guard.check()                # an interrupt Python dropped (see InterruptGuard.check)
         progress.examples += 1
         progress.units += units
         if deadline is not None:     # shrinking what an example found gets what is left
@@ -198,7 +199,7 @@ def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], No
             cases = mode.search(options.target, seed=options.seed, max_examples=options.examples,
                                 stop_after=options.time_s, database=options.database,
                                 on_example=example_done, **extra)
-        if watch.noted:                  # dropped after the last example: still an interrupt
+        if guard.received:               # dropped after the last example: still an interrupt
             interrupted_at = "search"
     except SearchInterrupted as exc:
         cases, interrupted_at = exc.cases, exc.phase
@@ -244,7 +245,7 @@ def _run_campaign(options: CampaignOptions, on_progress: Callable[[Progress], No
             interrupted_at = interrupted_at or "saving findings"
     result = CampaignResult(options, started, progress.examples, progress.units, duration,
                             findings, mode_invariants(mode, options), interrupted_at,
-                            watch.noted[0] if watch.noted and interrupted_at else None)
+                            guard.first if interrupted_at else None)
     if interrupted_at is not None:
         raise CampaignInterrupted(result)
     return result
@@ -352,7 +353,7 @@ def save_unreplayed(case: Case, directory: str | Path, ring: RingCapture | None 
                     note: str) -> Finding:
     """Save the case as it is, with the live capture if there is one, no replay: quick, and
     a further interrupt waits for it, so the files are whole."""
-    with interrupts_noted():
+    with InterruptGuard(held=True):
         path = save_case(case, directory)
         mcap = path.with_suffix(".mcap") if ring is not None else None
         exchange = ring.write(mcap) if ring is not None and mcap is not None else []

@@ -13,8 +13,9 @@ from mavconform.reference_impl.net.links import attach
 from mavconform.reference_impl.errors import UsageError
 from mavconform.reports.text import msp_stream_text
 from mavconform.reference_impl.net.uri import LISTEN_FORMS, PEER_FORMS, LinkUri, UdpUri, parse_link_uri, parse_udp_uri
+from mavconform.reference_impl.interrupts import InterruptGuard
 
-from .options import capture_to, mavlink_id, positive, sigterm_as_interrupt
+from .options import capture_to, mavlink_id, positive
 
 BUILTIN = "builtin"
 DESCRIPTION = """\
@@ -115,7 +116,7 @@ def _first_look(driver: UdpDriver, link: MspLink, fc: object) -> str:
 def _serve(driver: UdpDriver, bridge: MspBridge, clock: MonotonicClock, args: argparse.Namespace) -> None:
     end = None if args.duration is None else clock.now() + args.duration
     try:
-        with sigterm_as_interrupt():
+        with InterruptGuard():   # SIGTERM too stops it as Ctrl-C does
             shown = None
             while end is None or clock.now() < end:
                 step = 1.0 if end is None else max(0.0, min(1.0, end - clock.now()))

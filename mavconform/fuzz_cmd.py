@@ -12,10 +12,11 @@ from mavconform.fuzz.campaign import (MODES, RESTART_TIMEOUT, CampaignInterrupte
                                       load_mode, parse_duration, replay_recorded, run_campaign)
 from mavconform.conformance.target_uri import parse_target
 from mavconform.fuzz.case import load_case
-from mavconform.fuzz.outcomes import TargetUnresponsive, ToolError, interrupts_noted
+from mavconform.fuzz.outcomes import TargetUnresponsive, ToolError
 from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.interrupts import InterruptGuard
 
-from .options import seconds_up_to, sigterm_as_interrupt
+from .options import seconds_up_to
 
 EXIT_FINDING = 1
 EXIT_TOOL_ERROR = 3
@@ -83,7 +84,7 @@ examples:
   mavconform fuzz --target udpin:14550 --mode frames --time 5m          # a SITL that sends to us
   mavconform fuzz --target udpin:14550 --time 5m --restart-cmd './restart-sitl.sh'
   mavconform fuzz --replay fuzz-findings/protocol-atomic-upload-1a2b3c4d5e.json
-across cores and machines: pytest --pyargs mavconform.fuzz -n auto --fuzz-target builtin:spec (README)
+across cores and machines: pytest --pyargs mavconform.fuzz -n auto --fuzz-target builtin:spec (docs/fuzzing.md)
 """
 
 DEFAULT_EXAMPLES = 100
@@ -132,7 +133,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    with sigterm_as_interrupt():   # a CI cancel stops a campaign as Ctrl-C does
+    with InterruptGuard(once=False):   # a CI cancel (SIGTERM) stops a campaign as Ctrl-C does
         if args.replay:
             return _replay(args)   # interrupted: KeyboardInterrupt, 130 (the capture is closed)
         return _campaign(args)
@@ -187,7 +188,7 @@ def _campaign(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.done()
-    with interrupts_noted() as late:   # a signal now waits: no report is left half-written
+    with InterruptGuard(held=True) as late:   # a signal now waits: no report is left half-written
         doc = campaign_document(result)
         paths = write_reports(doc, args.report_dir, basename="fuzz")
     rate = result.examples / result.duration_s if result.duration_s > 0 else 0.0
@@ -202,7 +203,7 @@ def _campaign(args: argparse.Namespace) -> int:
               f"verdict {doc['summary']['verdict']}")
     if not result.findings:
         print(f"findings: none; reports in {paths['json'].parent}/")
-        return _interrupted(result.interrupted_at) if result.interrupted or late else 0
+        return _interrupted(result.interrupted_at) if result.interrupted or late.received else 0
     print(f"findings: {len(result.findings)}")
     for f in result.findings:
         print(f"  {f.case.violation}")
@@ -212,7 +213,7 @@ def _campaign(args: argparse.Namespace) -> int:
             print(f"    {f.note}")
         print(f"    replay: {replay_command(f)}")
     print(f"reports in {paths['json'].parent}/")
-    return _interrupted(result.interrupted_at) if result.interrupted or late else 1
+    return _interrupted(result.interrupted_at) if result.interrupted or late.received else 1
 
 
 def _interrupted(where: str | None) -> int:

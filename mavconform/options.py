@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import signal
 from typing import Any, Callable, Iterator
 
 from mavconform.reference_impl.net import FaultModel, McapCapture, parse_drop_rule
@@ -141,21 +140,3 @@ def capture_to(driver: Any, path: str | None) -> Iterator[None]:
         yield
     finally:
         capture.close()
-
-
-@contextlib.contextmanager
-def sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM (how services and CI jobs are stopped, and the only way to stop a background
-    job whose SIGINT the shell ignores) stops a serving command as Ctrl-C
-    does: counts printed, capture closed."""
-    def interrupt(signum: int, frame: object) -> None:
-        raise KeyboardInterrupt
-    try:
-        previous = signal.signal(signal.SIGTERM, interrupt)
-    except ValueError:   # not the main thread: leave signals alone
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)

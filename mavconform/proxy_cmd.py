@@ -12,8 +12,9 @@ from mavconform.reference_impl.errors import UsageError
 from mavconform.reference_impl.net import LinkStats, MonotonicClock, UdpDriver, UdpUri
 from mavconform.reference_impl.net.links import stream_peer
 from mavconform.reference_impl.net.uri import LISTEN_FORMS, PEER_FORMS, parse_link_uri
+from mavconform.reference_impl.interrupts import InterruptGuard
 
-from .options import add_fault_options, capture_to, describe_faults, fault_model, positive, sigterm_as_interrupt
+from .options import add_fault_options, capture_to, describe_faults, fault_model, positive
 
 DESCRIPTION = """\
 Sit between a GCS and a vehicle as a bad radio link. The GCS sends to --listen; the proxy
@@ -100,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
         with capture_to(proxy, args.capture):   # after the bind: a bad address leaves no file
             # Signals are caught before the listening line, so one sent on seeing it stops cleanly.
             try:
-                with sigterm_as_interrupt():
+                with InterruptGuard():   # SIGTERM too stops it as Ctrl-C does
                     stream = driver.stream_of(node_front(node))
                     here = stream.uri if stream is not None else f"udp:{_host(node.address[0])}:{node.address[1]}"
                     there = f"udp:{_host(forward[0])}:{forward[1]}" if isinstance(forward, tuple) else str(forward_uri)

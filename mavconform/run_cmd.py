@@ -57,8 +57,9 @@ from mavconform.conformance.msp.target import is_msp_target
 from mavconform.conformance.session import BUILTIN_CLOCK_SPEED
 from mavconform.conformance.target_uri import FORMS
 from mavconform.reference_impl.errors import UsageError
+from mavconform.reference_impl.interrupts import InterruptGuard
 
-from .options import clock_speed, sigterm_as_interrupt, time_scale
+from .options import clock_speed, time_scale
 
 MARK = {Outcome.PASS: "PASS", Outcome.FAIL: "FAIL", Outcome.KNOWN_DEVIATION: "KNOWN",
         Outcome.NOT_APPLICABLE: "N/A", Outcome.SKIPPED: "SKIP", Outcome.ERROR: "ERROR"}
@@ -123,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     the module docstring); SIGTERM before or after the run raises KeyboardInterrupt, which
     the command line also turns into 130."""
     args.role = _role(args)
-    with sigterm_as_interrupt():
+    with InterruptGuard():
         if args.role == "gcs":
             doc, outcome = _run_gcs(args)
         elif args.role == "msp":

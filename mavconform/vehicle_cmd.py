@@ -16,10 +16,11 @@ from mavconform.reference_impl.net.links import attach
 from mavconform.reference_impl.net.uri import LISTEN_FORMS, UdpUri, parse_link_uri
 from mavconform.reference_impl.profiles import BUILTIN_PROFILES, load_profile
 from mavconform.reference_impl.vehicle import VehicleNode
+from mavconform.reference_impl.interrupts import InterruptGuard
 
 from . import handover_cmd
 from .options import (add_fault_options, capture_to, describe_faults, fault_model, mavlink_id, positive,
-                      seconds_up_to, seq_number, sigterm_as_interrupt)
+                      seconds_up_to, seq_number)
 
 DESCRIPTION = """\
 Serve the reference vehicle on UDP, TCP or a serial line (or a pseudo-terminal it makes)
@@ -208,7 +209,7 @@ def _serve(driver: UdpDriver, vehicle: VehicleNode, clock: MonotonicClock, args:
     """Run until --duration (or Ctrl-C or SIGTERM), printing the vehicle's plan events as they happen."""
     end = None if args.duration is None else clock.now() + args.duration
     try:
-        with sigterm_as_interrupt():
+        with InterruptGuard():   # SIGTERM too stops it as Ctrl-C does
             _relay(driver, vehicle, end, clock, args)
     except KeyboardInterrupt:
         print("stopped", file=sys.stderr)

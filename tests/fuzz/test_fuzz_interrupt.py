@@ -251,14 +251,14 @@ def test_a_second_signal_while_the_reports_are_written_waits_for_them(tmp_path, 
     assert load_run(tmp_path / "rep" / "fuzz.json")["summary"]["verdict"] == "pass"   # it had finished
 
 
-def test_interrupts_noted_restores_the_handlers() -> None:
-    from mavconform.fuzz.outcomes import interrupts_noted
+def test_a_held_guard_notes_signals_and_restores_the_handlers() -> None:
+    from mavconform.reference_impl.interrupts import InterruptGuard
 
     if threading.current_thread() is not threading.main_thread():
         pytest.skip("signals are handled in the main thread only")
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
-    with interrupts_noted() as noted:
+    with InterruptGuard(held=True) as guard:
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(0)   # let the handler run
-    assert noted == ["SIGTERM"]
+    assert guard.received == ["SIGTERM"]
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
