@@ -32,7 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="mavconform",
         description="Conformance and fuzz test suite for MAVLink mission implementations: a "
-                    "spec-exact reference vehicle and GCS, runnable over UDP.",
+                    "spec-exact reference vehicle and GCS, runnable over UDP, TCP and serial links.",
     )
     parser.add_argument("--version", action="version", version=f"mavconform {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
