@@ -16,6 +16,16 @@ pytestmark = pytest.mark.skipif(threading.current_thread() is not threading.main
                                 reason="signals are handled in the main thread only")
 
 
+@pytest.fixture(autouse=True)
+def interactive_signals():
+    """SIGINT and SIGTERM as an interactive shell leaves them: a job started in the background
+    (CI's, nohup's) inherits SIGINT ignored, which the guard rightly leaves alone."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler), signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    yield
+    signal.signal(signal.SIGINT, previous[0])
+    signal.signal(signal.SIGTERM, previous[1])
+
+
 def _send(signum: int = signal.SIGTERM) -> None:
     os.kill(os.getpid(), signum)   # the handler runs before kill returns to Python code
 
