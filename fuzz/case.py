@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,8 @@ from typing import Any
 from mavconform.reference_impl.errors import UsageError
 
 FORMAT = "mavconform-fuzz-case/1"
+# What a hand-edited case can make a mode's replay raise (bad types or values in its steps).
+MALFORMED = (ValueError, TypeError, KeyError, AttributeError, IndexError, OverflowError, struct.error)
 MODES = ("protocol", "frames")
 # One-way latency of every simulated link an in-process campaign runs over: a reply then
 # comes after its request, as on a real link, so a finding's diagram reads in time, not all
