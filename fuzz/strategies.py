@@ -1,5 +1,4 @@
-"""Hypothesis strategies: valid plans, edge-value items, steps (edge values in
-edge_values.py, link faults in fault_strategies.py, both importable from here).
+"""Hypothesis strategies: valid plans, edge-value items, fault models and schedules, steps.
 
 Two kinds of item. `mission_item` draws a `MissionItem` the reference vehicle accepts
 (float32-exact values, so a round trip compares exactly); the tool's own tests use these.
@@ -23,6 +22,8 @@ their vocabulary is documented in `fuzz/protocol/steps.py` and drawn here.
 
 from __future__ import annotations
 
+import math
+import struct
 from typing import Any
 
 from hypothesis import strategies as st
@@ -31,17 +32,12 @@ from mavconform.reference_impl.mission.constants import (
     FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
 )
 from mavconform.reference_impl.mission.items import (
-    FRAME_MISSION, GLOBAL_FRAMES, LOCAL_FRAMES, PLAN_TYPES, MissionItem,
+    FRAME_MISSION, GLOBAL_FRAMES, INT32_MAX, INT32_MIN, LOCAL_FRAMES, PLAN_TYPES, MissionItem,
     MissionType,
 )
 from mavconform.reference_impl.handover import control_messages as cm
-from .edge_values import (  # noqa: F401  (fs.edge_f32, fs.OUT_OF_RANGE, ... for the fuzzer and the tests)
-    F32_EDGES, FLT_MAX, FLT_MIN_NORMAL, FLT_SUBNORMAL_MAX, FLT_SUBNORMAL_MIN, OUT_OF_RANGE, OUT_OF_RANGE_F32,
-    edge_f32, edge_i32, edge_ints, edge_u8, edge_u16, edge_u32, out_of_range_f32, subnormal_f32,
-)
-from .fault_strategies import MISSION_MESSAGES, fault_models, fault_schedules, partition  # noqa: F401
+from mavconform.reference_impl.net import FaultModel
 from .seeded import cached_strategy_builder
-
 
 # --- valid plans (what the reference vehicle accepts) ------------------------------------
 
@@ -81,6 +77,101 @@ def mission_item(draw, mission_type: MissionType) -> MissionItem:
 def plan_items(mission_type: MissionType, max_size: int = 20) -> st.SearchStrategy[list[MissionItem]]:
     return st.lists(mission_item(mission_type), min_size=0, max_size=max_size)
 
+
+partition = st.tuples(st.floats(0, 30), st.floats(0.5, 12)).map(lambda p: (p[0], p[0] + p[1]))
+
+
+@st.composite
+def fault_models(draw, max_loss: float = 0.3) -> FaultModel:
+    """Loss, duplication, reordering, delay and jitter, and sometimes a partition in time."""
+    return FaultModel(
+        partitions=tuple(sorted(draw(st.lists(partition, max_size=2)))),
+        loss=draw(st.floats(0, max_loss)),
+        duplicate=draw(st.floats(0, 0.2)),
+        reorder=draw(st.floats(0, 0.2)),
+        reorder_delay=draw(st.floats(0.0, 0.1)),
+        delay=draw(st.floats(0, 0.05)),
+        jitter=draw(st.floats(0, 0.05)),
+    )
+
+
+# --- edge values --------------------------------------------------------------------------
+
+def _f32(bits: int) -> float:
+    return struct.unpack("<f", struct.pack("<I", bits))[0]
+
+
+FLT_MAX = _f32(0x7F7FFFFF)
+FLT_MIN_NORMAL = _f32(0x00800000)
+FLT_SUBNORMAL_MIN = _f32(0x00000001)
+FLT_SUBNORMAL_MAX = _f32(0x007FFFFF)
+F32_EDGES = (float("nan"), float("inf"), float("-inf"), 0.0, -0.0, 1.0, -1.0, FLT_MAX, -FLT_MAX,
+             FLT_MIN_NORMAL, FLT_SUBNORMAL_MIN, -FLT_SUBNORMAL_MIN, FLT_SUBNORMAL_MAX, _f32(0x7FC00001))
+
+# Floats a float32 field carries exactly (so the wire delivers them unchanged) that no
+# integer the receiver converts them to can hold. Autopilots turn MISSION_ITEM's floats into
+# integers: latitude/longitude degrees * 1e7 into int32 degE7, local metres * 1e4 into
+# int32, altitudes into int32 cm or mm, params used as indices or counts (DO_JUMP's target
+# seq and repeat count, a fence polygon's vertex count) into int32/uint16/uint32. In C a
+# float-to-int conversion of a value out of the integer's range (NaN and +-inf included) is
+# undefined behaviour: on ARM it saturates, on x86 it gives INT_MIN, either way a stored
+# value nobody sent. Each value with the conversion it breaks:
+OUT_OF_RANGE: tuple[tuple[float, str], ...] = (
+    (math.nan, "no integer at all; and every comparison with it is false, so a range check "
+               "written as `v < lo || v > hi` lets it through"),
+    (math.inf, "no integer: converting it is undefined in C, so a range check done after the "
+               "conversion checks INT32_MIN (x86) or INT32_MAX (ARM) instead"),
+    (-math.inf, "as +inf, downwards"),
+    (1e10, "2^10 * 5^10, exact in float32: overflows int32 in every conversion (degE7 1e17, "
+           "local 1e14, cm 1e12, mm 1e13, or taken as a plain integer)"),
+    (-1e10, "as 1e10, downwards"),
+    (215.0, "the first whole degree whose degE7 overflows int32 (2.15e9 > INT32_MAX; the limit "
+            "is 214.7483647 deg): a longitude/latitude check done after the conversion sees a "
+            "wrapped value"),
+    (-215.0, "as 215, downwards (-2.15e9 < INT32_MIN)"),
+    (214749.0, "the first whole metre whose local-frame value (metres * 1e4) overflows int32 "
+               "(2147490000 > INT32_MAX); fits a plain int32, so only the scaled path breaks"),
+    (2147484.0, "the first whole metre whose altitude in mm overflows int32 (2147484000)"),
+    (21474838.0, "the first float32 whole metre whose altitude in cm overflows int32 "
+                 "(2147483800; 21474837 is no float32)"),
+    (65536.0, "UINT16_MAX + 1: a seq, jump target or count kept in 16 bits wraps to 0"),
+    (2.0**31, "INT32_MAX + 1: an index or count kept in int32 overflows by one (and "
+              "(float)INT32_MAX rounds to it, so `v <= (float)INT32_MAX` lets it through)"),
+    (-2.0**31 - 256, "the float32 just below INT32_MIN (float32 spacing there is 256): "
+                     "overflows int32 downwards; INT32_MIN itself still fits"),
+    (3e9, "fits uint32 but not int32: a signed/unsigned mix-up stores it negative"),
+    (2.0**32, "UINT32_MAX + 1: overflows uint32 too"),
+    (FLT_MAX, "the largest finite float32: overflows every integer, and * 1e7 in float32 "
+              "arithmetic is inf"),
+    (-FLT_MAX, "as FLT_MAX, downwards"),
+)
+OUT_OF_RANGE_F32: tuple[float, ...] = tuple(v for v, _ in OUT_OF_RANGE)
+out_of_range_f32 = st.sampled_from(OUT_OF_RANGE_F32)
+
+subnormal_f32 = st.floats(-FLT_MIN_NORMAL, FLT_MIN_NORMAL, width=32, exclude_min=True,
+                          exclude_max=True).filter(lambda v: v != 0.0)
+# Every float32 a field can carry, biased to the values that break parsers, validators and
+# the float-to-integer conversions after them (`OUT_OF_RANGE`; its NaN, +-inf and +-FLT_MAX
+# are edges already). A second NaN branch here made two same-seed searches in one process
+# shrink differently (seen with Hypothesis 6.170, whose shrinker compares values nested in
+# dicts with ==, and NaN != NaN), so only the values F32_EDGES lacks are added.
+_BEYOND_EDGES = tuple(v for v in OUT_OF_RANGE_F32 if v == v and v not in F32_EDGES)
+edge_f32 = st.one_of(st.sampled_from(F32_EDGES), st.sampled_from(_BEYOND_EDGES), subnormal_f32,
+                     st.floats(width=32))
+
+
+def edge_ints(lo: int, hi: int, *extra: int) -> st.SearchStrategy[int]:
+    """Integers in [lo, hi], biased to both ends, -1/0/1 and the given values."""
+    marks = sorted({v for v in (lo, lo + 1, -1, 0, 1, hi - 1, hi, *extra) if lo <= v <= hi})
+    return st.one_of(st.sampled_from(marks), st.integers(lo, hi))
+
+
+edge_u8 = edge_ints(0, 255, 2, 127, 128)
+edge_u16 = edge_ints(0, 65535, 255, 256, 32767, 32768)
+edge_u32 = edge_ints(0, 2**32 - 1, 2**31)
+# x/y: int32 extremes and the first values past +-90 / +-180 degrees in degE7.
+edge_i32 = edge_ints(INT32_MIN, INT32_MAX, 900_000_000, 900_000_001, -900_000_001,
+                     1_800_000_000, 1_800_000_001, -1_800_000_001)
 
 KNOWN_COMMANDS = frozenset(int(c) for c in (*MISSION_COMMANDS, *FENCE_COMMANDS, *RALLY_COMMANDS))
 _COMMANDS_BY_TYPE = {MissionType.MISSION: MISSION_COMMANDS, MissionType.FENCE: FENCE_COMMANDS,
@@ -291,6 +382,41 @@ def wire_plan(draw, mission_type: MissionType, max_size: int = 20, *,
             item["mission_type"] = draw(st.sampled_from(
                 [int(t) for t in PLAN_TYPES if t is not mission_type] + [3, 254, 255]))
     return items
+
+
+# --- fault schedules (JSON-safe; fuzz/protocol/faults.py turns them into FaultModels) -----
+
+MISSION_MESSAGES = ("MISSION_ACK", "MISSION_COUNT", "MISSION_REQUEST_INT", "MISSION_REQUEST",
+                    "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_REQUEST_LIST",
+                    "MISSION_CLEAR_ALL", "MISSION_CURRENT", "MISSION_SET_CURRENT")
+_prob = st.floats(0, 1).map(lambda p: round(p, 3))
+
+
+@st.composite
+def fault_schedules(draw, max_loss: float = 0.3, max_burst: float = 30.0) -> dict[str, Any]:
+    """One direction's faults: random loss, duplication, reordering, delay, jitter and
+    corruption; bursts (short total outages, `[start, length]` seconds after the schedule
+    is set); scripted drops ("the 2nd MISSION_ACK", "MISSION_ITEM_INT from the 3rd on");
+    and a cut: from the nth message called NAME on, the next `span` messages are all lost
+    (a partition that begins at a chosen message). Keys at their zero value are left out."""
+    spec = {
+        "loss": round(draw(st.floats(0, max_loss)), 3),
+        "duplicate": round(draw(st.floats(0, 0.2)), 3),
+        "reorder": round(draw(st.floats(0, 0.2)), 3),
+        "reorder_delay": round(draw(st.floats(0, 0.2)), 3),
+        "delay": round(draw(st.floats(0, 0.05)), 3),
+        "jitter": round(draw(st.floats(0, 0.05)), 3),
+        "corrupt": round(draw(st.floats(0, 0.05)), 3),
+        "bursts": [[round(s, 2), round(n, 2)] for s, n in draw(st.lists(
+            st.tuples(st.floats(0, min(20.0, max_burst)), st.floats(0.05, max_burst)), max_size=2))],
+        "drops": draw(st.lists(st.fixed_dictionaries({
+            "name": st.sampled_from(MISSION_MESSAGES), "nth": st.integers(1, 6),
+            "onwards": st.booleans()}), max_size=2)),
+        "cut": draw(st.one_of(st.none(), st.fixed_dictionaries({
+            "name": st.sampled_from(MISSION_MESSAGES), "nth": st.integers(1, 6),
+            "span": st.integers(1, 40)}))),
+    }
+    return {k: v for k, v in spec.items() if v}
 
 
 # --- protocol steps -------------------------------------------------------------------------
