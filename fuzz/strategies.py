@@ -24,8 +24,9 @@ created decides which draws share a cached strategy object, and that steers Hypo
 mutator. Moving the edge values to a module imported first changed what a seed explores
 (the seeded CI campaign ran 1137 or 1165 examples instead of 1133), even with the filter's
 lambda kept here; the valid plans (valid_plans.py), which came first and are imported first,
-moved without a change. A seed must keep its findings: split further only with campaigns that
-show it does.
+moved without a change. Moving the step functions of the operator-control section (plain
+functions, called when the state machine is built) changed it too (1145 examples). A seed must
+keep its findings: split further only with campaigns that show it does.
 """
 
 from __future__ import annotations
