@@ -1,7 +1,7 @@
 """The mission computer alone (sans-IO): positions, frames and ControlChanged events scripted in,
 virtual time, no network. The end-to-end flights are in test_handover_sequence.py.
 
-The geometry is a line north of HOME: GCS A covers 0..1200 m north, GCS B 800..2300 m, so the
+The geometry (line_geometry.py) is a line north of HOME: GCS A covers 0..1200 m north, GCS B 800..2300 m, so the
 handover region is 800..1200 m, under each of the thesis's three region methods.
 """
 
@@ -16,12 +16,9 @@ from hypothesis import strategies as st
 from mavconform.reference_impl.errors import LocalProtocolError
 from mavconform.reference_impl.handover import control_messages as cm
 from mavconform.reference_impl.handover.control_client import ClientConfig
-from mavconform.reference_impl.handover.control_manager import ControlManager, ManagerConfig
-from mavconform.reference_impl.handover.control_results import ControlChanged, Decision, TakeoverRequested
-from mavconform.reference_impl.handover.control_transitions import ControlState
-from mavconform.reference_impl.handover.gcs_handover import (AGENT_TRANSITIONS, AgentEvent, AgentState,
-                                                             GcsHandoverConfig, HandoverAgent)
-from mavconform.reference_impl.handover.geo import GeoPoint, destination
+from mavconform.reference_impl.handover.control_manager import ManagerConfig
+from mavconform.reference_impl.handover.control_results import ControlChanged
+from mavconform.reference_impl.handover.gcs_handover import AGENT_TRANSITIONS, AgentEvent, AgentState
 from mavconform.reference_impl.handover.hysteresis import (LATCH_TRANSITIONS, Edge, Latch, LatchEvent, Presence,
                                                            Sense, sense_of, signed_distance_m)
 from mavconform.reference_impl.handover.mission_computer import (
@@ -29,34 +26,13 @@ from mavconform.reference_impl.handover.mission_computer import (
     critical_path_budget)
 from mavconform.reference_impl.handover.mission_computer_transitions import (
     MC_TRANSITIONS, PHASE_TRANSITIONS, HandoverOutcome as Out, HandoverPhase, McEvent, McState, PhaseEvent)
-from mavconform.reference_impl.handover.regions import Circle, Intersection, OwnedWaypoints, Polygon
+from mavconform.reference_impl.handover.regions import Circle, Intersection, OwnedWaypoints
 from mavconform.reference_impl.mission.actions import Send
 from mavconform.reference_impl.state_table import next_state
 from mavconform.reference_impl.wire import FrameDecoder, FrameEncoder
 from mavconform.reference_impl.wire.dialect import mavlink as d
 
-VEHICLE = (1, 1)
-A, B, C = 201, 202, 203
-HOME = GeoPoint(47.397742, 8.545594)
-
-
-def at(north: float, east: float = 0.0) -> GeoPoint:
-    p = destination(HOME, 0.0, north) if north >= 0 else destination(HOME, 180.0, -north)
-    return destination(p, 90.0, east) if east else p
-
-
-def rect(south: float, north: float, half_width: float = 300.0) -> Polygon:
-    return Polygon((at(south, -half_width), at(south, half_width), at(north, half_width), at(north, -half_width)))
-
-
-COVERAGES = {
-    "polygon": {A: rect(-300, 1200), B: rect(800, 2300)},
-    "circle": {A: Circle(HOME, 1200.0), B: Circle(at(2000), 1200.0)},
-    # the round trip below: out to 2000 m and back; B owns the legs from 800 m out and back to 800 m
-    "waypoints": {A: OwnedWaypoints(frozenset({0, 1, 6, 7})), B: OwnedWaypoints(frozenset({2, 3, 4, 5}))},
-}
-WAYPOINTS = ((0, at(0)), (1, at(400)), (2, at(800)), (3, at(1200)), (4, at(2000)), (5, at(1200)), (6, at(800)),
-             (7, at(0)))
+from .line_geometry import A, B, C, COVERAGES, HOME, VEHICLE, WAYPOINTS, at, rect
 
 
 def config(method: str = "polygon", **kw) -> MissionComputerConfig:
@@ -475,77 +451,3 @@ def test_a_bad_config_is_refused_naming_the_field(kw, match):
 def test_the_config_is_hashable_and_the_check_period_is_the_thesis_50_ms():
     cfg = config()
     assert hash(cfg) == hash(config()) and cfg.check_period == 0.05
-
-
-# --- the system manager's hook ----------------------------------------------------------------
-def test_withdraw_ends_a_forwarded_request_or_a_window_and_nothing_else():
-    enc = {s: FrameEncoder(s, 190) for s in (A, B)}
-
-    def f(sender, msg):
-        (fr,) = FrameDecoder().feed(enc[sender].encode(msg))
-        return fr
-    m = ControlManager(*VEHICLE, ManagerConfig())
-    m.handle(f(A, cm.request_command(VEHICLE, 1, False, 10, A)), 0.0)
-    m.handle(f(B, cm.request_command(VEHICLE, 1, False, 10, B)), 0.1)
-    assert m.state is ControlState.REQUEST_PENDING
-    assert m.withdraw(C, 0.2) == [] and m.state is ControlState.REQUEST_PENDING
-    m.withdraw(B, 0.2)
-    assert m.state is ControlState.OWNED and m.owner == A
-    m.handle(f(B, cm.request_command(VEHICLE, 1, False, 10, B)), 0.3)
-    m.handle(f(A, cm.request_command(VEHICLE, 1, True, 10, A)), 0.4)
-    assert m.state is ControlState.WINDOW_OPEN
-    out = m.withdraw(B, 0.5)
-    assert m.state is ControlState.OWNED and m.owner == A
-    (status,) = [a.msg for a in out if isinstance(a, Send)]
-    assert status.gcs_main == A and not status.flags & d.GCS_CONTROL_STATUS_FLAGS_TAKEOVER_ALLOWED
-
-
-# --- the GCS agent's policy -------------------------------------------------------------------
-def test_the_commander_allows_a_known_partner_only_when_its_telemetry_says_the_handover_is_due():
-    agent = HandoverAgent(A, GcsHandoverConfig(COVERAGES["polygon"], slack_m=50.0), fallback=lambda r: Decision.RELEASE)
-    req = TakeoverRequested(B, False, 10.0, 10.0)
-    assert agent.policy(req) is Decision.REFUSE and "no recent" in agent.decisions[-1][2]
-    agent.position = (at(500), 9.5)
-    assert agent.policy(req) is Decision.REFUSE                     # 300 m short of the region
-    agent.position = (at(780), 2.0)
-    assert agent.policy(req) is Decision.REFUSE                     # inside the slack, but 8 s old
-    agent.position = (at(780), 9.5)
-    assert agent.policy(req) is Decision.ALLOW and agent.authorised_for == B
-    # param2 1: B's own allow-takeover, resent after it lost control to A: never a handover
-    assert agent.policy(TakeoverRequested(B, True, 10.0, 10.0)) is Decision.REFUSE
-    assert agent.policy(TakeoverRequested(C, False, 10.0, 10.0)) is Decision.RELEASE   # not a partner: fallback
-
-
-def test_the_commander_under_the_waypoint_method_follows_mission_current():
-    agent = HandoverAgent(A, GcsHandoverConfig(COVERAGES["waypoints"]))
-    req = TakeoverRequested(B, False, 10.0, 10.0)
-    agent.mission_current = (1, 9.0)
-    assert agent.policy(req) is Decision.REFUSE
-    agent.mission_current = (2, 9.0)                                # flying the leg to B's waypoint
-    assert agent.policy(req) is Decision.ALLOW
-
-
-def test_a_commander_that_lost_and_regained_control_is_asked_again_by_the_same_partner():
-    """Regression: the client used to keep a forwarded request for its whole param3 timeout, so
-    the same partner asking again after a handover there and back (within 30 s) went unasked,
-    and the second handover to it aborted. Losing control ends what there was to answer."""
-    from mavconform.reference_impl.handover.control_client import ControlClient
-    asked = []
-    client = ControlClient(A, 190, VEHICLE, ClientConfig(), policy=lambda r: asked.append(r.at) or Decision.REFUSE)
-    vehicle = FrameEncoder(*VEHICLE)
-
-    def hear(msg, now):
-        (fr,) = _dec.feed(vehicle.encode(msg))
-        return client.handle(fr, now)
-
-    def status(owner):
-        return cm.control_status(owner, takeover_allowed=False)
-    forward = cm.request_command((A, 190), cm.ACTION_REQUEST, False, 30.0, B)
-    hear(status(A), 0.0)
-    hear(forward, 1.0)
-    hear(forward, 2.0)                       # a resend of the same notice: not asked twice
-    assert asked == [1.0]
-    hear(status(B), 3.0)                     # B took over ...
-    hear(status(A), 6.0)                     # ... and handed back
-    hear(forward, 9.0)                       # B asks again, 8 s after the first: a new request
-    assert asked == [1.0, 9.0]
