@@ -18,7 +18,6 @@ stream, whose state carries from one datagram to the next (reference_impl/wire/c
 
 from __future__ import annotations
 
-import dataclasses
 import shutil
 import struct
 import subprocess
@@ -29,32 +28,20 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mavconform.conformance.target_uri import parse_target
-from mavconform.fuzz.case import Case
-from mavconform.fuzz.frames import replay, wire
-from mavconform.fuzz.frames.admission import INERT, TARGET_TABLE, Admission
-from mavconform.reference_impl.wire.cparser import (BAD_CRC, DIALECT_TABLE, FRAME_CHAR_BUFFER, OK, PARSE_CHAR,
-                                 VARIANTS, CParser, ParsedFrame)
-from mavconform.fuzz.frames.mutators import MUTATORS, MutationContext
-from mavconform.fuzz.frames.program import Builder, FrameSpec, programs
-from mavconform.fuzz.frames.rig import Rig, _plan_diff
-from mavconform.fuzz.frames.templates import GCS_IDS, TEMPLATE_NAMES, TEMPLATES
-from mavconform.reference_impl.mission import messages as m
-from mavconform.reference_impl.mission.items import MissionType
-from mavconform.reference_impl.net.clock import SimClock
-from mavconform.reference_impl.wire.codec import FrameEncoder
+from mavconform.fuzz.frames import wire
+from mavconform.fuzz.frames.admission import TARGET_TABLE, Admission
+from mavconform.reference_impl.wire.cparser import (DIALECT_TABLE, FRAME_CHAR_BUFFER, OK, PARSE_CHAR,
+                                 VARIANTS, CParser)
+from mavconform.fuzz.frames.program import Builder, programs
 from mavconform.reference_impl.wire.dialect import XML_PATH
 
-KEY, WRONG = bytes(range(32)), bytes(range(1, 33))
-TARGET = (1, 1)
-CLOCK = SimClock(1.7e9)          # a wall clock after 2015, so signing timestamps are real
-ORACLE = (250, 190)
+from .frames_admission_streams import (CLEAR, CLOCK, HEARTBEAT, KEY, TARGET, accepted, ctx, inert, model_events,
+                                       mutate, oracle_frame, plan_changing, streams)
+
 PX4_HELPERS = Path("/work/sitl/px4/build/px4_sitl_default/mavlink/mavlink_helpers.h")
 STATES = ["IDLE", "IDLE", "GOT_STX", "GOT_LENGTH", "GOT_INCOMPAT_FLAGS", "GOT_COMPAT_FLAGS", "GOT_SEQ",
           "GOT_SYSID", "GOT_COMPID", "GOT_MSGID1", "GOT_MSGID2", "GOT_MSGID3", "GOT_PAYLOAD", "GOT_CRC1",
           "GOT_BAD_CRC1", "SIGNATURE_WAIT", "SIGNATURE_WAIT_BAD_CRC"]    # mavlink_parse_state_t
-MUTATOR_LIST = list(MUTATORS.values())
-MUTATOR_INDEX = {name: i for i, name in enumerate(MUTATORS)}
 
 # One channel of the C parser over stdin: records of <u32 length><bytes>, each a fresh
 # channel; per frame the parser reports, "<index after its last byte> <msgid> <result>
@@ -160,102 +147,6 @@ def need_c(c_build) -> dict[str, CProcess]:
     if isinstance(c_build, str):
         pytest.skip(c_build)
     return c_build
-
-
-# --- building streams ------------------------------------------------------------------------
-
-def ctx() -> MutationContext:
-    return MutationContext(key=KEY, wrong_key=WRONG, wall_clock=CLOCK.wall)
-
-
-ENCODERS = {src: FrameEncoder(*src) for src in set(GCS_IDS)}
-BASES = {(s, t): ENCODERS[GCS_IDS[s]].encode(build(TARGET))
-         for s in range(len(GCS_IDS)) for t, (_, build) in enumerate(TEMPLATES)}
-
-
-def template(name: str, source: int = 0) -> bytes:
-    return BASES[(source, TEMPLATE_NAMES.index(name))]
-
-
-def mutate(mutator: str, frame: bytes, arg: int = 7) -> bytes:
-    return MUTATORS[mutator](frame, arg, ctx())
-
-
-CLEAR = template("MISSION_CLEAR_ALL all")
-HEARTBEAT = template("HEARTBEAT")
-
-
-def oracle_frame(signing: bool = False) -> bytes:
-    frame = FrameEncoder(*ORACLE).encode(m.request_list_message(MissionType.MISSION, TARGET))
-    return wire.sign(frame, KEY, 0, ctx().fresh_timestamp() + 10**6) if signing else frame
-
-
-def inert(msgid: int) -> bool:
-    return TARGET_TABLE.name(msgid) in INERT
-
-
-def model_events(variant: str, datagrams: list[bytes]) -> tuple[list[tuple[int, ...]], str]:
-    """What the harness prints, predicted by the model: mavlink_parse_char reports OK frames
-    only; mavlink_frame_char_buffer every frame, and a signed frame with a bad checksum twice
-    (at its second checksum byte, then after the 13 bytes it swallows)."""
-    model = CParser(variant)
-    frames = [f for d in datagrams for f in model.feed(d)]
-    events = []
-    row = lambda f, at: (at, f.msgid, f.result, f.sysid, f.compid)   # noqa: E731
-    for f in frames:
-        if variant == FRAME_CHAR_BUFFER and f.signed and f.result == BAD_CRC:
-            events.append(row(f, f.crc + 2))
-        if variant == FRAME_CHAR_BUFFER or f.ok:
-            events.append(row(f, f.end))
-    pending = model.pending()
-    if variant == FRAME_CHAR_BUFFER and pending is not None and not pending.ok:
-        events.append(row(pending, pending.crc + 2))
-    return events, model.c_state()
-
-
-def accepted(variant: str, datagrams: list[bytes], *, table=TARGET_TABLE,
-             key: bytes | None = None) -> list[ParsedFrame]:
-    """The OK frames one fresh C parser (model) finds in the datagrams, in order."""
-    model = CParser(variant, table=table, key=key, wall_clock=CLOCK.wall)
-    return [f for d in datagrams for f in model.feed(d) if f.result == OK]
-
-
-def plan_changing(frames: list[ParsedFrame]) -> list[ParsedFrame]:
-    return [f for f in frames if not inert(f.msgid)]
-
-
-def split(stream: bytes, cuts: list[int]) -> list[bytes]:
-    points = sorted({c % (len(stream) + 1) for c in cuts})
-    out, prev = [], 0
-    for c in points + [len(stream)]:
-        out.append(stream[prev:c])
-        prev = c
-    return out
-
-
-piece = st.tuples(st.integers(0, len(GCS_IDS) - 1), st.integers(0, len(TEMPLATES) - 1),
-                  st.integers(0, len(MUTATORS) - 1), st.integers(0, 0xFFFF), st.booleans(),
-                  st.sampled_from([None, None, 0xFD, 0xFE]))
-corruption = st.tuples(st.integers(0, 1 << 20), st.sampled_from([0xFD, 0xFE, 0x00, 0x01, 0x02, 0x80, 0xFF]))
-
-
-@st.composite
-def streams(draw) -> list[bytes]:
-    """Datagrams cut from a stream of real frames, mutated (some signed first, some ending
-    on a start byte: a bad frame that ends so restarts mavlink_parse_char), with a few
-    bytes overwritten by start bytes and flags."""
-    c = ctx()
-    frames = []
-    for source, tpl, mutator, arg, signed, last in draw(st.lists(piece, min_size=1, max_size=20)):
-        base = BASES[(source, tpl)]
-        if signed:
-            base = wire.sign(base, KEY, arg & 3, c.fresh_timestamp())
-        frame = MUTATOR_LIST[mutator](base, arg, c)
-        frames.append(frame if last is None else frame[:-1] + bytes((last,)))
-    stream = bytearray(b"".join(frames))
-    for at, value in draw(st.lists(corruption, max_size=4)):
-        stream[at % len(stream)] = value
-    return split(bytes(stream), draw(st.lists(st.integers(0, 1 << 20), max_size=6)))
 
 
 # --- the model is the C code -------------------------------------------------------------------
@@ -469,68 +360,3 @@ def test_admitted_programs_hold_no_accepted_plan_changing_frame(c_build, program
             events, state = proc.run(stream)
             assert [(e[0], e[1]) for e in events if e[2] == OK and not inert(e[1])] == [(len(stream), 43)], label
             assert state == "IDLE"
-
-
-# --- the rig ----------------------------------------------------------------------------------
-
-def _tx_to_vehicle(records: list) -> list[bytes]:
-    return [r.data for r in records if r.kind == "tx" and r.dst == "vehicle"]
-
-
-def test_the_rig_resyncs_before_the_oracle_speaks_and_replay_sends_the_same_filler() -> None:
-    records: list = []
-    rig = Rig(parse_target("builtin:spec"), seed=3, capture=records.append)
-    assert rig.start() is None
-    adm = rig.builder.admission
-    before = len(_tx_to_vehicle(records))
-    clear = TEMPLATE_NAMES.index("MISSION_CLEAR_ALL all")
-    specs = [FrameSpec(0, clear, MUTATOR_INDEX["truncate"], 30)]      # cut short
-    frames, fixed = rig.builder.datagram(specs)
-    assert fixed == []
-    rig.send(frames)
-    rig.flush()
-    assert adm.pending()            # the stream model is mid-frame: the oracle would be swallowed
-    assert rig.check() is None
-    assert not adm.pending() and adm.resyncs == 1 and adm.leaked == 0
-    sent = _tx_to_vehicle(records)[before:]
-    assert sent[0] == b"".join(frames)
-    filler = sent[1]
-    assert filler and not {0xFD, 0xFE} & set(filler) and len(set(filler)) == 1
-    # the oracle's first frame after it is read whole by both C parsers
-    for v in VARIANTS:
-        got = accepted(v, [b"".join(frames), filler, sent[2]])
-        assert [TARGET_TABLE.name(f.msgid) for f in got] == [TARGET_TABLE.name(sent[2][7])]
-    # replay: the same datagrams, the same filler, in the same place
-    case = Case("frames", "builtin:spec", 3, ({"setup": {"signing": False}}, {"send": [{"bytes": b"".join(frames)}]}))
-    again: list = []
-    assert replay(case, capture=again.append) is None
-    assert _tx_to_vehicle(again) == _tx_to_vehicle(records)
-
-
-def test_the_oracle_is_held_back_while_a_batch_is_sent() -> None:
-    rig = Rig(parse_target("builtin:spec"), seed=4)
-    assert rig.start() is None
-    rig.gcs.poll(rig.clock.now() + 5.0)           # a HEARTBEAT of the oracle is due
-    rig.send([CLEAR[:12]])
-    out = rig.station.take_outgoing()
-    assert [d for d, _ in out] == [CLEAR[:12]]    # the fuzz datagram only, the oracle held
-    rig.flush()
-    out = rig.station.take_outgoing()
-    assert len(out) >= 2 and not {0xFD, 0xFE} & set(out[0][0])   # filler first, then the oracle
-    assert not rig.builder.admission.pending()
-
-
-def test_downloads_are_compared_in_the_stored_form() -> None:
-    rig = Rig(parse_target("builtin:spec"), seed=5)
-    assert rig.start() is None
-    known = rig.expected
-    # a real vehicle moves the `current` flag: not a difference
-    rig.expected = tuple(dataclasses.replace(i, current=1 - i.current) for i in known)
-    assert rig.check() is None
-    rig.expected = (dataclasses.replace(known[0], x=known[0].x + 1),) + tuple(known[1:])
-    v = rig.check()
-    assert v.invariant == "download-completes"
-    assert f"seq {known[0].seq}: x {known[0].x} (expected {known[0].x + 1})" in v.detail
-    assert "compared as" in v.detail and "builtin:spec" in v.detail
-    assert _plan_diff(known, known[:-1], rig.form) == f"{len(known) - 1} items instead of {len(known)}"
-    assert _plan_diff(known, None) == "nothing came back"
