@@ -25,6 +25,7 @@ from typing import Any, Callable
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, rule
 
+from mavconform.fuzz import control_strategies as cs
 from mavconform.fuzz import strategies as fs
 
 from ..case import LINK_LATENCY, Violation
@@ -209,19 +210,19 @@ def machine_class(knobs: Knobs, *, on_example: Callable[[int], None] | None = No
                 self._do(step)
 
         if knobs.handover:
-            @rule(step=fs.control_step(max_timeout=knobs.max_wait, actions=("request",)))
+            @rule(step=cs.control_step(max_timeout=knobs.max_wait, actions=("request",)))
             def request_control(self, step: dict[str, Any]) -> None:
                 self._do(step)
 
-            @rule(step=fs.control_step(max_timeout=knobs.max_wait, actions=("release", "allow", "disallow")))
+            @rule(step=cs.control_step(max_timeout=knobs.max_wait, actions=("release", "allow", "disallow")))
             def release_or_hand_over_control(self, step: dict[str, Any]) -> None:
                 self._do(step)
 
-            @rule(step=fs.gcs_loss_step(min(12.0, knobs.max_burst), knobs.max_wait))
+            @rule(step=cs.gcs_loss_step(min(12.0, knobs.max_burst), knobs.max_wait))
             def a_gcs_falls_silent(self, step: dict[str, Any]) -> None:
                 self._do(step)
 
-            @rule(step=fs.b_operation(n))
+            @rule(step=cs.b_operation(n))
             def second_gcs_operates_alone(self, step: dict[str, Any]) -> None:
                 self._do(step)
 
