@@ -56,6 +56,7 @@ td.n { text-align: right; font-variant-numeric: tabular-nums; }
          font-size: .85em; font-weight: 600; white-space: nowrap; }
 """ + "".join(f".badge.o-{name} {{ background: {colour}; }}\n"
               for name, colour in OUTCOME_COLOURS.items()) + """
+.badge.none { background: #8c959f; }
 code, .id { font-family: ui-monospace, monospace; }
 section#what-failed { border: 2px solid #cf222e; border-radius: 6px; padding: 0 1em 1em;
                       margin: 1em 0 2em; }
@@ -310,7 +311,8 @@ def _capture_href(capture: str, folder: str | Path | None) -> str:
 
 def _counts(clauses: list[dict[str, Any]]) -> list[str]:
     counts = outcome_counts(clauses)
-    rows = [f'<tr><td>{_badge(outcome)}</td><td class="n">{counts[outcome]}</td></tr>'
+    # an outcome no clause had is grey: a red "fail 0" on a passing run reads as a failure
+    rows = [f'<tr><td>{_badge(outcome, none=not counts[outcome])}</td><td class="n">{counts[outcome]}</td></tr>'
             for outcome in OUTCOMES]
     return ["<h3>Outcomes</h3>", "<table>", *rows,
             f'<tr><th>total</th><td class="n">{len(clauses)}</td></tr>', "</table>"]
@@ -401,8 +403,9 @@ def _target_lane(clause: dict[str, Any]) -> str:
     return role if role in ("vehicle", "gcs") else "target"
 
 
-def _badge(outcome: str) -> str:
-    return f'<span class="badge o-{escape(outcome)}">{escape(outcome)}</span>'
+def _badge(outcome: str, *, none: bool = False) -> str:
+    extra = " none" if none else ""
+    return f'<span class="badge o-{escape(outcome)}{extra}">{escape(outcome)}</span>'
 
 
 def _anchor(clause: dict[str, Any]) -> str:

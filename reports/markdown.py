@@ -102,8 +102,8 @@ def markdown_summary(doc: dict[str, Any]) -> str:
     if "fidelity" in doc:      # a fidelity survey: its matrices instead of clauses
         return "\n".join(out + ["", survey_markdown(doc["fidelity"])]).rstrip("\n") + "\n"
     out += ["", "| Outcome | Clauses |", "|---|--:|"]
-    for outcome, count in outcome_counts(clauses).items():
-        out.append(f"| {OUTCOME_ICONS[outcome]} {outcome} | {count} |")
+    for outcome, count in outcome_counts(clauses).items():   # no red cross beside "fail 0"
+        out.append(f"| {OUTCOME_ICONS[outcome] + ' ' if count else ''}{outcome} | {count} |")
     out.append(f"| **total** | **{len(clauses)}** |")
 
     out += _reading_order(doc)

@@ -5,6 +5,7 @@ not-applicable and skipped clauses folded in groups by reason; all before the ma
 import re
 
 from mavconform.reports.html import html_report, not_passing
+from mavconform.reports.markdown import markdown_summary
 
 from .sample import clause, event
 
@@ -127,6 +128,13 @@ def test_a_passing_run_with_deviations_shows_no_red(doc):
     assert '<section id="what-failed" class="none">' in body
     assert "No clause fails the run" in body
     assert "o-fail" not in body and "o-error" not in body and "<h2>Fails the run" not in body
+    # below it too: the outcome counts show "fail 0" and "error 0" in grey, not red
+    text = html_report(doc)
+    assert re.findall(r'class="badge o-(?:fail|error)[^"]*"', text) == [
+        'class="badge o-fail none"', 'class="badge o-error none"']
+    assert ".badge.none {" in text and text.index(".badge.o-fail {") < text.index(".badge.none {")
+    summary = markdown_summary(doc)   # run.md: no red cross beside a count of none
+    assert "| fail | 0 |" in summary and "| error | 0 |" in summary and "\u274c" not in summary
 
 
 def test_the_failed_clause_marks_the_message_that_decided_it(doc):
