@@ -29,6 +29,7 @@ from mavconform.reference_impl.mission.items import PLAN_TYPES, MissionItem, Mis
 from . import readiness
 from .checks import CHECKS
 from .clause import Clause
+from .clause_loop import ClauseLoop, OnResult
 from .harness import procedures
 from .harness.exchange import Exchange
 from .harness.float_forms import JUDGES_INT_FORMS
@@ -36,9 +37,6 @@ from .harness.measured import Measured
 from .outcome import (ClauseFailed, ClauseResult, NotApplicable, Outcome, PreconditionFailed,
                       Skipped, TargetUnresponsive)
 from .session import Session
-
-OnResult = Callable[[Clause, ClauseResult], None]
-
 
 @dataclass
 class RunOutcome:
@@ -111,59 +109,39 @@ def _mark(session: Session, label: str, level: str = "info") -> None:
 
 def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnResult | None = None,
                 restore: bool = True, guard: InterruptGuard | None = None) -> RunOutcome:
-    clauses = list(clauses)
+    loop = ClauseLoop(clauses, on_result, guard)
     started = time.monotonic()
-    results: list[ClauseResult] = []
     identity: dict | None = None
     discovered = 0.0
     snapshot: dict[MissionType, list[MissionItem]] | None = None
     changed = False            # the run may have changed the target's plans
-    phase = "discovery"        # where an interrupt would land
-    dead: str | None = None
-    interrupted = False
 
-    def record(clause: Clause, result: ClauseResult) -> None:
-        results.append(result)
-        if on_result:
-            on_result(clause, result)
+    def dead_after(clause: Clause, result: ClauseResult) -> str | None:
+        if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
+            if not _still_alive(session):
+                return f"the target stopped answering during {clause.id}"
+        return None
 
-    try:
+    with loop.interruptible():   # an interrupt: stop, but still put the target back and report
         try:
             identity = session.discover()
             discovered = time.monotonic() - started
         except TargetUnresponsive as exc:
-            for clause in clauses:
-                record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
-            return RunOutcome(results, None, {"status": "skipped", "detail": "the target never answered"},
+            for clause in loop.clauses:
+                loop.record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
+            return RunOutcome(loop.results, None, {"status": "skipped", "detail": "the target never answered"},
                               time.monotonic() - started, 0.0, unresponsive=str(exc),
                               receive_queue=session.receive_facts(), link=session.link_facts,
                               link_events=session.link_events())
         if restore:
-            phase = "reading the target's plans"
+            loop.phase = "reading the target's plans"
             snapshot = _snapshot(session)
-        phase, changed = "preparing the target", True
+        loop.phase, changed = "preparing the target", True
         identity["prepared"] = readiness.prepare(session.t).line()
-        for clause in clauses:
-            if dead is not None:
-                record(clause, ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}"))
-                continue
-            phase = clause.id
-            result = run_one(session, clause)
-            if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
-                if not _still_alive(session):
-                    dead = f"the target stopped answering during {clause.id}"
-            record(clause, result)
-    except KeyboardInterrupt:   # stop, but still put the target back and report
-        if guard is not None:
-            guard.hold()
-        interrupted = True
-    if guard is not None:
-        guard.hold()   # from here on a signal waits for the restore and the reports
-    how = guard.first if guard is not None else None
-    if interrupted:
-        skip_undecided(clauses, results, phase, how, record)
-        if identity is not None:
-            _after_interrupt(session)
+        loop.run(lambda clause: run_one(session, clause), dead_after)
+    results, phase, dead, interrupted, how = loop.results, loop.phase, loop.dead, loop.interrupted, loop.interrupted_by
+    if interrupted and identity is not None:
+        _after_interrupt(session)
     if not restore:
         restore_status = {"status": "skipped", "detail": "not asked (--no-restore)"}
     elif dead is not None:
@@ -183,18 +161,6 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
                       interrupted_by=how if interrupted else None,
                       receive_queue=session.receive_facts(), flights=list(session.flights),
                       link=session.link_facts, link_events=session.link_events())
-
-
-def skip_undecided(clauses: list[Clause], results: list[ClauseResult], phase: str, how: str | None,
-                   record: Callable[[Clause, ClauseResult], None]) -> None:
-    """After an interrupt: every clause not decided is `skipped`, saying where the run stopped."""
-    by = f" ({how})" if how else ""
-    done = {r.clause_id for r in results}
-    for clause in clauses:
-        if clause.id not in done:
-            record(clause, ClauseResult(clause.id, Outcome.SKIPPED,
-                                        f"interrupted{by} while it ran: not decided" if clause.id == phase
-                                        else f"not run: the run was interrupted{by} during {phase}"))
 
 
 def interrupted_before_start(clauses: Iterable[Clause], how: str | None,

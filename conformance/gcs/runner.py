@@ -15,7 +15,8 @@ from typing import Iterable
 from ..clause import Clause
 from ..harness.exchange import Exchange
 from ..outcome import ClauseResult, Outcome
-from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check, skip_undecided
+from ..clause_loop import ClauseLoop
+from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check
 from .checks import GCS_CHECKS
 from .harness import GcsHarness
 
@@ -24,40 +25,26 @@ DEAD_AFTER = 3   # operations in a row in which the GCS sent nothing
 
 def run_gcs_clauses(h: GcsHarness, clauses: Iterable[Clause], *, on_result: OnResult | None = None,
                     guard: InterruptGuard | None = None) -> RunOutcome:
-    clauses = list(clauses)
+    loop = ClauseLoop(clauses, on_result, guard, phase="starting")
     started = time.monotonic()
-    results: list[ClauseResult] = []
-    silent, dead, interrupted, phase = 0, None, False, "starting"
+    silent = 0
 
-    def record(clause: Clause, result: ClauseResult) -> None:
-        results.append(result)
-        if on_result:
-            on_result(clause, result)
+    def dead_after(clause: Clause, result: ClauseResult) -> str | None:
+        nonlocal silent
+        silent = silent + 1 if result.detail.startswith("target unresponsive") else 0
+        return f"the GCS sent nothing in {DEAD_AFTER} operations in a row" if silent >= DEAD_AFTER else None
 
-    try:
-        for clause in clauses:
-            if dead is not None:
-                record(clause, ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}"))
-                continue
-            phase = clause.id
-            result = run_one(h, clause)
-            silent = silent + 1 if result.detail.startswith("target unresponsive") else 0
-            if silent >= DEAD_AFTER:
-                dead = f"the GCS sent nothing in {DEAD_AFTER} operations in a row"
-            record(clause, result)
-    except KeyboardInterrupt:
-        if guard is not None:
-            guard.hold()
-        interrupted = True
-        skip_undecided(clauses, results, phase, guard.first if guard is not None else None, record)
+    with loop.interruptible():
+        loop.run(lambda clause: run_one(h, clause), dead_after)
+    dead, interrupted, phase = loop.dead, loop.interrupted, loop.phase
     first = next((op for op in h.operations if op.gcs is not None), None)
     identity = None if first is None else {"system": first.gcs[0], "component": first.gcs[1],
                                            "gcs": h.adapter.describe()}
-    return RunOutcome(results, identity, {"status": "skipped", "detail": "a GCS under test holds no plan of "
-                                          "the suite's: each operation had a vehicle of its own"},
+    return RunOutcome(loop.results, identity, {"status": "skipped", "detail": "a GCS under test holds no plan "
+                                               "of the suite's: each operation had a vehicle of its own"},
                       time.monotonic() - started, 0.0, unresponsive=dead, interrupted=interrupted,
                       interrupted_at=phase if interrupted else None,
-                      interrupted_by=guard.first if interrupted and guard is not None else None)
+                      interrupted_by=loop.interrupted_by if interrupted else None)
 
 
 def run_one(h: GcsHarness, clause: Clause) -> ClauseResult:

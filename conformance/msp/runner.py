@@ -21,7 +21,8 @@ from mavconform.reference_impl.msp.commands import Waypoint
 from ..clause import Clause
 from ..harness.exchange import Exchange
 from ..outcome import ClauseResult, Outcome, TargetUnresponsive
-from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check, skip_undecided
+from ..clause_loop import ClauseLoop
+from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check
 from .checks import MSP_CHECKS
 from .session import MspSession
 
@@ -50,55 +51,40 @@ def discover(session: MspSession) -> dict:
 
 def run_msp_clauses(session: MspSession, clauses: Iterable[Clause], *, on_result: OnResult | None = None,
                     restore: bool = True, guard: InterruptGuard | None = None) -> RunOutcome:
-    clauses = list(clauses)
+    loop = ClauseLoop(clauses, on_result, guard)
     started = time.monotonic()
-    results: list[ClauseResult] = []
     snapshot: list[Waypoint] | None = None
-    phase, dead, interrupted, identity = "discovery", None, False, None
+    identity = None
 
-    def record(clause: Clause, result: ClauseResult) -> None:
-        results.append(result)
-        if on_result:
-            on_result(clause, result)
+    def dead_after(clause: Clause, result: ClauseResult) -> str | None:
+        if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
+            if session.tester.ask("MSP_API_VERSION") is None:
+                return f"the flight controller stopped answering during {clause.id}"
+        return None
 
-    try:
+    with loop.interruptible():
         try:
-            identity = discover(session)
-        except TargetUnresponsive as exc:
-            for clause in clauses:
-                record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
-            return RunOutcome(results, None, {"status": "skipped", "detail": "the flight controller never answered"},
-                              time.monotonic() - started, 0.0, unresponsive=str(exc), link=session.link_facts,
-                              link_events=session.link_events())
-        if restore:
-            phase = "reading the flight controller's mission"
-            snapshot = session.tester.stored()
-        for clause in clauses:
-            if dead is not None:
-                record(clause, ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}"))
-                continue
-            phase = clause.id
-            result = run_one(session, clause)
-            if result.outcome is Outcome.ERROR and result.detail.startswith("target unresponsive"):
-                if session.tester.ask("MSP_API_VERSION") is None:
-                    dead = f"the flight controller stopped answering during {clause.id}"
-            record(clause, result)
-    except TargetUnresponsive as exc:     # while reading the mission, before any clause
-        dead = f"the flight controller stopped answering: {exc}"
-        for clause in clauses[len(results):]:
-            record(clause, ClauseResult(clause.id, Outcome.ERROR, f"not run: {dead}"))
-    except KeyboardInterrupt:
-        if guard is not None:
-            guard.hold()
-        interrupted = True
-        skip_undecided(clauses, results, phase, guard.first if guard is not None else None, record)
-    if guard is not None:
-        guard.hold()
+            try:
+                identity = discover(session)
+            except TargetUnresponsive as exc:
+                for clause in loop.clauses:
+                    loop.record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
+                return RunOutcome(loop.results, None, {"status": "skipped",
+                                                       "detail": "the flight controller never answered"},
+                                  time.monotonic() - started, 0.0, unresponsive=str(exc), link=session.link_facts,
+                                  link_events=session.link_events())
+            if restore:
+                loop.phase = "reading the flight controller's mission"
+                snapshot = session.tester.stored()
+            loop.run(lambda clause: run_one(session, clause), dead_after)
+        except TargetUnresponsive as exc:     # while reading the mission, before any clause
+            loop.give_up(f"the flight controller stopped answering: {exc}")
+    dead, interrupted, phase = loop.dead, loop.interrupted, loop.phase
     session.tester.exchange = None
     status = _restore(session, snapshot, restore=restore, dead=dead)
-    return RunOutcome(results, identity, status, time.monotonic() - started, session.tester.forced_wait,
+    return RunOutcome(loop.results, identity, status, time.monotonic() - started, session.tester.forced_wait,
                       unresponsive=dead, interrupted=interrupted, interrupted_at=phase if interrupted else None,
-                      interrupted_by=guard.first if interrupted and guard is not None else None,
+                      interrupted_by=loop.interrupted_by if interrupted else None,
                       link=session.link_facts, link_events=session.link_events())
 
 
