@@ -38,6 +38,7 @@ from .outcome import (ClauseFailed, ClauseResult, NotApplicable, Outcome, Precon
                       Skipped, TargetUnresponsive)
 from .session import Session
 
+
 @dataclass
 class RunOutcome:
     results: list[ClauseResult]

@@ -24,8 +24,8 @@ campaign's Hypothesis runs, and our strategies avoid the fourth:
   share a label, and Hypothesis labels `just(x)` and `sampled_from(xs)` by hash(x). A NaN's
   hash is its identity, so a `just(float("nan"))` made per draw got a label that depended on
   where the NaN was allocated: moving unrelated code between modules, or importing one more
-  module first, changed what seed 1 explored (1133 examples or 1165). Strategies are built
-  once, from long-lived values (tests/fuzz/test_seeded_labels.py is the tripwire).
+  module first, changed what seed 1 explored (1133 examples or 1165). No strategy may hold such
+  a value made per draw (tests/fuzz/test_seeded_labels.py is the tripwire).
 
 These are the causes found, not all there are: an xdist worker that had run many other tests
 was still once seen to explore other examples in a second same-seed search (before the fourth

@@ -13,10 +13,10 @@ documented in `fuzz/protocol/steps.py` and drawn here. What goes into them lives
 - `valid_plans.py`: the plans the reference vehicle accepts, which the tool's own tests draw.
 
 The names of the first four are importable from here too, as the tests use them (`fs.*`).
-Strategies are built once (at module level or by a `cached_strategy_builder`) and none holds an
-object whose hash is its identity (a NaN made per draw once did): a strategy's label decides
-which draws Hypothesis's mutator splices together, so a seed explores the same examples however
-the code is spread over modules (tests/fuzz/test_seeded_labels.py).
+No strategy may hold a value whose hash is its identity, made anew per draw (a NaN once was): a
+strategy's label decides which draws Hypothesis's mutator splices together, and such a label
+hangs on the allocator. Without one, a seed explores the same examples however the code is
+spread over modules (tests/fuzz/test_seeded_labels.py).
 """
 
 from __future__ import annotations
