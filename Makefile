@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: setup setup-interop test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-msp run-msp-bridge run-msp-bridge-clients run-fidelity run-gcs run-gcs-clients demo fuzz fault-table vectors handover docs bench clean
+.PHONY: setup setup-interop setup-mavproxy setup-docs setup-all test run run-links run-profiles run-px4 run-ardupilot run-mavsdk run-msp-interop run-msp run-msp-bridge run-msp-bridge-clients run-fidelity run-gcs run-gcs-clients demo fuzz fault-table vectors handover docs bench clean
 
 setup: $(VENV)/.installed
 
@@ -46,6 +46,8 @@ $(VENV)/.interop-installed: $(VENV)/.installed
 
 setup-interop: $(VENV)/.interop-installed   ## the interop extra (the mavsdk wheel, yamspy) on top of setup
 
+setup-all: setup-interop setup-mavproxy setup-docs  ## every install the jobs need: run it before jobs side by side
+
 run-msp: setup       ## the MSP clauses vs builtin:msp (INAV's waypoint store) over TCP loopback -> reports/msp/
 	$(BIN)/mavconform run --target builtin:msp --report-dir reports/msp -q
 
@@ -60,7 +62,7 @@ run-msp-bridge: setup  ## the MAVLink suite through the MSP bridge to builtin:ms
 	@mkdir -p $(BRIDGE_OUT); \
 	$(BIN)/mavconform bridge --msp builtin --listen udpin:0 --duration 600 >$(BRIDGE_OUT)/bridge.out 2>&1 & pid=$$!; \
 	trap 'kill $$pid 2>/dev/null' EXIT; \
-	for i in $$(seq 100); do grep -q 'listening on' $(BRIDGE_OUT)/bridge.out && break; kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
+	for i in $$(seq 600); do grep -q 'listening on' $(BRIDGE_OUT)/bridge.out && break; kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
 	target=$$(sed -n 's/.*listening on \(udp:127\.0\.0\.1:[0-9]*\);.*/\1/p' $(BRIDGE_OUT)/bridge.out); \
 	if [ -z "$$target" ]; then echo "run-msp-bridge: the bridge did not start:" >&2; cat $(BRIDGE_OUT)/bridge.out >&2; exit 1; fi; \
 	timeout 600 $(BIN)/mavconform run --target $$target --expect msp-bridge --report-dir $(BRIDGE_OUT) -q
@@ -73,7 +75,7 @@ run-mavsdk: $(VENV)/.interop-installed  ## the suite vs MAVSDK's MissionRawServe
 	@mkdir -p $(MAVSDK_OUT); \
 	$(BIN)/python tools/mavsdk_vehicle.py --duration 900 >$(MAVSDK_OUT)/vehicle.out 2>$(MAVSDK_OUT)/vehicle.log & pid=$$!; \
 	trap 'kill $$pid 2>/dev/null; for i in 1 2 3 4 5 6 7 8 9 10; do kill -0 $$pid 2>/dev/null || break; sleep 1; done; kill -9 $$pid 2>/dev/null' EXIT; \
-	for i in $$(seq 100); do grep -q '^listening on' $(MAVSDK_OUT)/vehicle.out && break; kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
+	for i in $$(seq 600); do grep -q '^listening on' $(MAVSDK_OUT)/vehicle.out && break; kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
 	target=$$(sed -n 's/^listening on \(udp:127\.0\.0\.1:[0-9]*\) .*/\1/p' $(MAVSDK_OUT)/vehicle.out); \
 	if [ -z "$$target" ]; then echo "run-mavsdk: the MAVSDK vehicle did not start:" >&2; cat $(MAVSDK_OUT)/vehicle.log >&2; exit 1; fi; \
 	clauses=$$($(BIN)/python -c "from mavconform.conformance.catalogue import CLAUSES; skip = set('$(MAVSDK_SKIP)'.split()); print(','.join(c.id for c in CLAUSES if c.id not in skip))"); \
@@ -94,6 +96,8 @@ $(MAVPROXY_VENV)/.installed:
 	$(MAVPROXY_VENV)/bin/python -m pip install --quiet --upgrade pip
 	$(MAVPROXY_VENV)/bin/python -m pip install --quiet MAVProxy==1.8.75
 	touch $@
+
+setup-mavproxy: $(MAVPROXY_VENV)/.installed  ## MAVProxy in a venv of its own (.venv-mavproxy), for the GCS runs
 
 run-msp-bridge-clients: $(VENV)/.interop-installed $(MAVPROXY_VENV)/.installed  ## MAVSDK and MAVProxy upload, download and clear through the MSP bridge to builtin:msp
 	$(BIN)/python tools/gcs_through_bridge.py --gcs mavsdk --out reports/msp-bridge-mavsdk
@@ -139,6 +143,8 @@ $(VENV)/.docs-installed: $(VENV)/.installed
 	$(QUIET_EDITABLE) $(BIN)/python -m pip install --quiet -e '.[docs]'
 	touch $@
 
+setup-docs: $(VENV)/.docs-installed  ## the docs extra (MkDocs) on top of setup
+
 docs: $(VENV)/.docs-installed  ## the user guide (docs/, MkDocs) built with --strict -> reports/site/
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
 
@@ -151,4 +157,5 @@ bench: setup         ## figures, not pass/fail
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis reports/out reports/fuzz reports/px4 reports/ardupilot reports/mavsdk reports/handover fuzz-findings \
-		reports/gcs reports/gcs-mavsdk reports/gcs-mavproxy reports/gcs-mavproxy.log reports/site $(MAVPROXY_VENV)
+		reports/gcs reports/gcs-mavsdk reports/gcs-mavproxy reports/gcs-mavproxy.log reports/site $(MAVPROXY_VENV) \
+		reports/links reports/msp reports/msp-bridge reports/msp-bridge-mavsdk reports/msp-bridge-mavproxy reports/fidelity-spec reports/fidelity-px4 reports/fidelity-ardupilot

@@ -100,9 +100,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="X",
                    help="stretch every protocol wait by X for slow links (default 1)")
     p.add_argument("--clock-speed", type=clock_speed, metavar="X",
-                   help="a builtin: or mutant: target and the suite share one clock running X times "
-                        f"real time: every timer, timeout and bound a clause judges is in its seconds "
-                        f"(default {BUILTIN_CLOCK_SPEED:g}; 1: real time). External targets live in real time")
+                   help="a builtin: or mutant: target (with --role gcs: builtin:gcs or gcs-mutant:) and the "
+                        "suite share one clock running X times real time: every timer, timeout and bound a "
+                        f"clause judges is in its seconds (default {BUILTIN_CLOCK_SPEED:g}; 1: real time). "
+                        "External targets and GCS commands live in real time")
     p.add_argument("--seed", type=int, default=0, help="seed recorded in the report (default 0)")
     p.add_argument("--allow-flight", action="store_true",
                    help="let progress clauses start the mission (always on for builtin targets)")
@@ -199,14 +200,14 @@ def _run_gcs(args: argparse.Namespace) -> tuple[dict[str, Any], Any]:
     """The GCS side: the options a vehicle run has that mean nothing here are refused."""
     given = [flag for flag, value in (("--handover-scenario", args.handover_scenario),
                                       ("--allow-flight", args.allow_flight), ("--no-restore", args.no_restore),
-                                      ("--time-scale", args.time_scale != 1.0),
-                                      ("--clock-speed", args.clock_speed is not None)) if value]
+                                      ("--time-scale", args.time_scale != 1.0)) if value]
     if given:
         raise UsageError(f"{given[0]} is for --role vehicle (a GCS run has no vehicle of its own to fly, "
                          "restore or slow down; its bound is --gcs-timeout)")
     target = f"cmd:{args.gcs_cmd}" if args.gcs_cmd is not None else (args.target or gcs_suite.BUILTIN)
     options = document.RunOptions(target=target, clauses=args.clauses, strict=args.strict, seed=args.seed,
-                                  expectations=args.expect, baseline=args.baseline, role="gcs")
+                                  expectations=args.expect, baseline=args.baseline, role="gcs",
+                                  clock_speed=args.clock_speed)
     prepared = gcs_suite.prepare(options, target=args.target, command=args.gcs_cmd, levels=args.level,
                                  report_dir=args.report_dir, timeout_s=args.gcs_timeout)
     print(f"mavconform: {len(prepared.clauses)} GCS clauses against {prepared.adapter.describe()}", flush=True)

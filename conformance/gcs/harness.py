@@ -11,13 +11,14 @@ Each operation's events go into the clause's exchange, for the report.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import Any, Iterable
 
 from mavconform.reference_impl.mission.items import MissionItem, MissionType
+from mavconform.reference_impl.net.clock import Clock, MonotonicClock, ScaledClock
 
 from ..harness.exchange import Exchange, message_fields
+from ..harness.link_timing import link_facts
 from ..outcome import ClauseFailed, TargetUnresponsive
 from .adapters import GcsAdapter
 from .job import Job, JobResult
@@ -61,10 +62,18 @@ class Operation:
 
 
 class GcsHarness:
+    """`clock_speed`: over real UDP, the clock the stages and an in-process GCS share, this
+    many times real time (every timer, timeout and bound in its seconds, as the vehicle
+    suite runs builtin vehicles); a GCS process lives in real time."""
+
     def __init__(self, adapter: GcsAdapter, *, real_time: bool = True, timeout_s: float = 30.0,
-                 seed: int = 0, capture: Any = None) -> None:
+                 seed: int = 0, capture: Any = None, clock_speed: float = 1.0) -> None:
         self.adapter = adapter
         self.real_time = real_time or adapter.needs_real_time
+        if clock_speed != 1.0 and adapter.needs_real_time:
+            raise ValueError(f"a GCS process lives in real time, not on a {clock_speed:g}x clock")
+        self.clock_speed = clock_speed if self.real_time else 1.0
+        self.clock: Clock = ScaledClock(clock_speed) if self.clock_speed != 1.0 else MonotonicClock()
         self.timeout_s = timeout_s
         self.seed = seed
         self.capture = capture
@@ -117,8 +126,15 @@ class GcsHarness:
             self._record(op)
         return op
 
+    def link(self) -> dict[str, Any] | None:
+        """The run document's `run.link` when the clock was faster than real (else None, as
+        before clocks could be: a GCS run over UDP in real time records no link)."""
+        if self.clock_speed == 1.0:
+            return None
+        return {**link_facts("in-process", None), "clock_speed": self.clock_speed}
+
     def now(self) -> float:
-        return time.monotonic() if self.real_time else self._sim_time
+        return self.clock.now() if self.real_time else self._sim_time
 
     def decide(self, op: Operation, event: Event | None) -> None:
         """The event the verdict is about (the report marks it)."""
@@ -128,7 +144,7 @@ class GcsHarness:
     # --- internals ---------------------------------------------------------------------------
     def _stage(self, vehicle: ScriptedVehicle) -> Stage:
         if self.real_time:
-            return UdpStage(vehicle, self.capture)
+            return UdpStage(vehicle, self.capture, self.clock)
         return SimStage(vehicle, seed=self.seed, start=self._sim_time, capture=self.capture)
 
     def _record(self, op: Operation) -> None:

@@ -44,7 +44,7 @@ def run_gcs_clauses(h: GcsHarness, clauses: Iterable[Clause], *, on_result: OnRe
                                                "of the suite's: each operation had a vehicle of its own"},
                       time.monotonic() - started, 0.0, unresponsive=dead, interrupted=interrupted,
                       interrupted_at=phase if interrupted else None,
-                      interrupted_by=loop.interrupted_by if interrupted else None)
+                      interrupted_by=loop.interrupted_by if interrupted else None, link=h.link())
 
 
 def run_one(h: GcsHarness, clause: Clause) -> ClauseResult:

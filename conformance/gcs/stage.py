@@ -2,9 +2,10 @@
 
 Every operation gets a fresh stage (a new vehicle, a new port), so nothing a GCS left
 behind (a late resend, a process that outlived its bound) reaches the next clause. Over
-real UDP (`UdpStage`, what a GCS process needs: it is told the vehicle's port) or in
-virtual time (`SimStage`, for in-process GCSs in the tool's own tests: a 9 s retry
-sequence costs microseconds). Both offer `clock`, `run_until` and `add_gcs`.
+real UDP (`UdpStage`, what a GCS process needs: it is told the vehicle's port; for the
+in-process GCSs, on a clock faster than real that both sides read) or in virtual time
+(`SimStage`, for in-process GCSs in the tool's own tests: a 9 s retry sequence costs
+microseconds). Both offer `clock`, `run_until` and `add_gcs`.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import socket
 from typing import Callable, Protocol
 
 from mavconform.reference_impl.net import MonotonicClock, SimClock, SimNetwork, UdpDriver
+from mavconform.reference_impl.net.clock import Clock
 from mavconform.reference_impl.net.node import Address, DatagramNode
 from mavconform.reference_impl.net.sim import CaptureHook
 
@@ -29,7 +31,7 @@ class Stage(Protocol):
     real_time: bool
 
     @property
-    def clock(self) -> SimClock | MonotonicClock: ...
+    def clock(self) -> Clock: ...
 
     def run_until(self, condition: Callable[[], bool], *, timeout: float) -> bool: ...
 
@@ -41,15 +43,16 @@ class Stage(Protocol):
 class UdpStage:
     real_time = True
 
-    def __init__(self, vehicle: ScriptedVehicle, capture: CaptureHook | None = None) -> None:
+    def __init__(self, vehicle: ScriptedVehicle, capture: CaptureHook | None = None,
+                 clock: Clock | None = None) -> None:
         self.vehicle = vehicle
-        self.driver = UdpDriver(MonotonicClock())
+        self.driver = UdpDriver(clock or MonotonicClock())
         if capture is not None:
             self.driver.add_capture(capture)
         self.vehicle_address = self.driver.add_node(vehicle, bind=(HOST, 0))
 
     @property
-    def clock(self) -> MonotonicClock:
+    def clock(self) -> Clock:
         return self.driver.clock
 
     def run_until(self, condition: Callable[[], bool], *, timeout: float) -> bool:

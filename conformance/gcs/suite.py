@@ -22,6 +22,7 @@ from mavconform.reference_impl.net.sim import CaptureHook
 from .. import catalogue, document, expectations
 from ..clause import Clause, Role
 from ..runner import InterruptGuard, OnResult, RunOutcome
+from ..session import BUILTIN_CLOCK_SPEED
 from ..suite import checked_outputs, guarded_run
 from .adapters import CommandAdapter, GcsAdapter, NodeAdapter
 from .harness import GcsHarness
@@ -42,6 +43,7 @@ class PreparedGcs:
     baseline: dict[str, str] | None
     report_dir: Path | None
     timeout_s: float
+    clock_speed: float = 1.0     # of the clock the stages and an in-process GCS share
 
 
 def gcs_adapter(target: str | None, command: str | None, workdir: Path | None = None) -> GcsAdapter:
@@ -72,9 +74,15 @@ def prepare(options: document.RunOptions, *, target: str | None, command: str | 
     if not clauses:
         raise UsageError(f"no GCS clause matches --clauses {options.clauses!r} with --level {levels!r}")
     expected, baseline, out = checked_outputs(options, report_dir)
+    speed = options.clock_speed
+    if command is not None and speed not in (None, 1.0):
+        raise UsageError("--clock-speed: a GCS command lives in real time (a faster clock is for "
+                         f"{BUILTIN} and {MUTANT_PREFIX}NAME, in this process)")
+    if speed is None:   # a process is told a real port and keeps real time; ours share our clock
+        speed = 1.0 if command is not None else BUILTIN_CLOCK_SPEED
     workdir = (out / "gcs-jobs") if out is not None else Path(tempfile.mkdtemp(prefix="mavconform-gcs-"))
-    adapter = gcs_adapter(target, command, workdir)
-    return PreparedGcs(options, adapter, clauses, expected, baseline, out, timeout_s)
+    return PreparedGcs(options, gcs_adapter(target, command, workdir), clauses, expected, baseline, out,
+                       timeout_s, speed)
 
 
 def execute(p: PreparedGcs, *, virtual: bool = False, on_result: OnResult | None = None,
@@ -83,7 +91,7 @@ def execute(p: PreparedGcs, *, virtual: bool = False, on_result: OnResult | None
     `virtual`: in virtual time (an in-process GCS only; the tool's own tests)."""
     def clauses(guard: InterruptGuard, capture: CaptureHook | None, on_result: OnResult | None) -> RunOutcome:
         harness = GcsHarness(p.adapter, real_time=not virtual, timeout_s=p.timeout_s, seed=p.options.seed,
-                             capture=capture)
+                             capture=capture, clock_speed=1.0 if virtual else p.clock_speed)
         return run_gcs_clauses(harness, p.clauses, on_result=on_result, guard=guard)
     return guarded_run(p.options, p.expected, p.baseline, p.report_dir, clauses, on_result=on_result,
                        stop_signals=stop_signals, capture=not virtual)

@@ -118,7 +118,7 @@ def test_dead_target_is_reported_fast(tmp_path, capsys) -> None:
     (["run", "--clock-speed", "0"], "must be a finite number > 0"),
     (["run", "--clock-speed", "17"], "must be at most 16"),
     (["run", "--target", "udp:127.0.0.1:9", "--clock-speed", "2"], "external target, which lives in real time"),
-    (["run", "--role", "gcs", "--clock-speed", "2"], "--clock-speed is for --role vehicle"),
+    (["run", "--role", "gcs", "--time-scale", "2"], "--time-scale is for --role vehicle"),
     (["report", "render", "/nonexistent/run.json"], "/nonexistent/run.json"),
 ])
 def test_usage_mistakes_get_one_line_and_exit_2(argv, message, capsys, tmp_path) -> None:

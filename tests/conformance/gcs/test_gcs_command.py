@@ -121,6 +121,8 @@ def test_an_adapter_that_cannot_run_the_job_is_an_error_not_a_finding(tmp_path: 
     (["run", "--role", "gcs", "--target", "builtin:gcs", "--gcs-cmd", "x {port} {op} {file}"], "give one"),
     (["run", "--role", "gcs", "--clauses", "MIS.UP.01"], "matches no gcs clause"),
     (["run", "--role", "gcs", "--gcs-timeout", "0"], "--gcs-timeout must be"),
+    (["run", "--role", "gcs", "--gcs-cmd", "x {port} {op} {file}", "--clock-speed", "2"],
+     "a GCS command lives in real time"),
 ])
 def test_gcs_usage_mistakes_get_one_line_and_exit_2(argv, message, capsys, tmp_path: Path) -> None:
     assert main([*argv, "--report-dir", str(tmp_path)]) == 2
@@ -146,3 +148,29 @@ def test_a_gcs_mutant_run_writes_reports_that_name_the_role(tmp_path: Path) -> N
     assert doc["clauses"][0]["outcome"] == "fail" and doc["clauses"][0]["decided_by"] is not None
     assert "MIS.G.DN.05" in (tmp_path / "run.md").read_text()
     assert "MIS.G.DN.05" in (tmp_path / "run.junit.xml").read_text()
+
+
+def test_the_reference_gcs_and_the_suite_share_a_faster_clock_and_the_report_says_so(tmp_path: Path, capsys) -> None:
+    """Issue 27: builtin:gcs (and the GCS mutants) run over UDP on a clock 4x real time, as the
+    builtin vehicles do: the GCS's resend timer (about 1.5 s) and the silence bounds are judged
+    in that clock's seconds, so the verdicts are real time's. A mutant whose resend comes too
+    early fails at either speed; `--clock-speed 1` is real time, and then no link is recorded."""
+    clauses = "MIS.G.TO.01,MIS.G.UP.06"
+    runs = {}
+    for speed, target in (("4", "builtin:gcs"), ("1", "builtin:gcs"), ("4", "gcs-mutant:short-timeout")):
+        out = tmp_path / f"{target.split(':')[1]}-{speed}"
+        extra = [] if speed == "4" else ["--clock-speed", speed]
+        main(["run", "--role", "gcs", "--target", target, "--clauses", clauses, *extra, "--report-dir", str(out)])
+        runs[target, speed] = (json.loads((out / "run.json").read_text()), capsys.readouterr().out)
+    fast, said = runs["builtin:gcs", "4"]
+    assert fast["run"]["link"] == {"kind": "in-process", "bytes_per_second": None, "reply_allowance_s": 0.0,
+                                   "clock_speed": 4.0}
+    assert "on a clock 4x real time shared with the target" in said
+    real, said = runs["builtin:gcs", "1"]
+    assert "link" not in real["run"] and "on a clock" not in said
+    assert [c["outcome"] for c in fast["clauses"]] == [c["outcome"] for c in real["clauses"]] == ["pass", "pass"]
+    # the resend came about 1.5 s of the run's clock after MISSION_COUNT, at either speed
+    for doc in (fast, real):
+        assert 1.5 <= doc["volatile"]["clauses"]["MIS.G.TO.01"]["duration_s"]
+    mutant, _ = runs["gcs-mutant:short-timeout", "4"]
+    assert {c["id"]: c["outcome"] for c in mutant["clauses"]}["MIS.G.TO.01"] == "fail"
