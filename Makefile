@@ -19,8 +19,17 @@ $(VENV)/.installed: pyproject.toml
 	$(QUIET_EDITABLE) $(BIN)/python -m pip install --quiet -e .
 	touch $@
 
+# The tests marked udp (real sockets, vehicle processes, real-time timeouts: 144 tests, about 7
+# minutes of waiting for 1.5 of CPU) run one at a time in a pytest of their own, beside the rest
+# spread over the cores: in the xdist pool they held a worker while its core idled. Their output
+# comes after the rest's; make test fails if either run fails.
 test: setup          ## the tool's own tests (bounded: a few minutes on 2 cores), spread over the cores
-	$(BIN)/python -m pytest -n auto
+	@log=$$(mktemp); $(BIN)/python -m pytest -m udp -q -p no:xdist >$$log 2>&1 & udp=$$!; \
+	trap 'kill $$udp 2>/dev/null; rm -f $$log' EXIT; \
+	echo "$(BIN)/python -m pytest -n auto -m 'not udp'   (and -m udp beside it, one at a time)"; \
+	$(BIN)/python -m pytest -n auto -m 'not udp'; rest=$$?; \
+	wait $$udp; udp_code=$$?; echo "--- the tests marked udp, run beside the rest (pytest -m udp):"; cat $$log; \
+	test $$rest -eq 0 && test $$udp_code -eq 0
 
 run: setup           ## the main job: the conformance suite vs builtin:spec over UDP loopback -> reports/out/
 	$(BIN)/mavconform run --target builtin:spec --report-dir reports/out
