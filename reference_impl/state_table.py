@@ -14,6 +14,15 @@ from .errors import LocalProtocolError
 S = TypeVar("S", bound=Enum)
 
 
+class TableEnum(Enum):
+    """An Enum hashed by identity, for states and events a hot engine looks up on every step.
+
+    Enum's own `__hash__` hashes the member's name in Python code, twice per table lookup;
+    members are singletons compared by identity, so identity is as good a hash, and C-fast."""
+
+    __hash__ = object.__hash__
+
+
 def next_state(table: Mapping[tuple[S, Enum], S], state: S, event: Enum, engine: str) -> S:
     """The state `event` leads to from `state`; LocalProtocolError if the table has no such move."""
     try:

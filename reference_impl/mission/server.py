@@ -75,6 +75,9 @@ class ServerStats:
     history: list[tuple[MissionType, SlotState, SlotEvent, SlotState]] = field(default_factory=list)
 
 
+# The engine each slot's moves are said to be made by (made once: `_move` runs every frame).
+_ENGINE_NAMES = {t: f"server {t.label}" for t in PLAN_TYPES}
+
 # Where the vehicle is when no one has said otherwise (home_at_seq0 serves it as item 0).
 DEFAULT_HOME = MissionItem(0, 0, Cmd.NAV_WAYPOINT, x=473977420, y=85455940, z=0.0)
 
@@ -384,7 +387,7 @@ class MissionServer(ServerUploads):
         slot.partner, slot.deadline, slot.received, slot.count, slot.expected = None, None, [], 0, 0
 
     def _move(self, slot: _Transfer, event: SlotEvent) -> None:
-        new_state = next_state(ALL_SERVER_TRANSITIONS, slot.state, event, f"server {slot.mission_type.label}")
+        new_state = next_state(ALL_SERVER_TRANSITIONS, slot.state, event, _ENGINE_NAMES[slot.mission_type])
         if self._record:
             self.stats.history.append((slot.mission_type, slot.state, event, new_state))
         slot.state = new_state

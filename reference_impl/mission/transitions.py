@@ -6,10 +6,10 @@ truth a test can walk and a report can draw (after h11's `_state.py`).
 
 from __future__ import annotations
 
-from enum import Enum
+from ..state_table import TableEnum
 
 
-class SlotState(Enum):
+class SlotState(TableEnum):
     """A vehicle-side transfer slot (one per plan type)."""
 
     IDLE = "idle"
@@ -17,7 +17,7 @@ class SlotState(Enum):
     SENDING = "sending"       # download: answering the GCS's requests
 
 
-class SlotEvent(Enum):
+class SlotEvent(TableEnum):
     COUNT = "MISSION_COUNT > 0 accepted"
     COUNT_ZERO = "MISSION_COUNT = 0 (clear)"
     COUNT_REJECTED = "MISSION_COUNT refused (NO_SPACE)"
@@ -82,7 +82,7 @@ PROFILE_TRANSITIONS: dict[tuple[SlotState, SlotEvent], SlotState] = {
 ALL_SERVER_TRANSITIONS = {**SERVER_TRANSITIONS, **PROFILE_TRANSITIONS}
 
 
-class ClientState(Enum):
+class ClientState(TableEnum):
     """The GCS-side engine (one operation at a time)."""
 
     IDLE = "idle"
@@ -94,7 +94,7 @@ class ClientState(Enum):
     SET_CURRENT_SENT = "set current: waiting for MISSION_CURRENT"
 
 
-class ClientEvent(Enum):
+class ClientEvent(TableEnum):
     START_UPLOAD = "upload started: MISSION_COUNT sent"
     START_DOWNLOAD = "download started: MISSION_REQUEST_LIST sent"
     START_CLEAR = "clear started: MISSION_CLEAR_ALL sent"
