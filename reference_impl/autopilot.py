@@ -215,8 +215,10 @@ class Autopilot:
         return []
 
     def next_deadline(self) -> float | None:
-        times = [t for t in (self._disarm_at, self._idle_disarm_at) if t is not None]
-        return min(times) if times else None
+        a, b = self._disarm_at, self._idle_disarm_at   # asked after every frame: no list
+        if a is None:
+            return b
+        return a if b is None or a <= b else b
 
     def poll(self, now: float) -> list[Send]:
         """What the autopilot does by itself, after the flight model moved on to `now`."""

@@ -223,10 +223,12 @@ class VehicleNode:
 
     def next_deadline(self) -> float | None:
         best = self._next_heartbeat
-        control = self.control.next_deadline() if self.control is not None else None
-        mc = self.mission_computer.next_deadline() if self.mission_computer is not None else None
         for t in (self._next_position, self.server.next_deadline(), self.flight.next_deadline(),
-                  self.autopilot.next_deadline(), control, mc):
+                  self.autopilot.next_deadline()):
+            if t is not None and (best is None or t < best):
+                best = t
+        for engine in (self.control, self.mission_computer):   # None unless configured
+            t = engine.next_deadline() if engine is not None else None
             if t is not None and (best is None or t < best):
                 best = t
         return best

@@ -126,9 +126,13 @@ class MissionProgress:
         return [Send(m.item_reached_message(seq))]
 
     def next_deadline(self) -> float | None:
-        times = [self._next_stream, self._repeat[2] if self._repeat is not None else None,
-                 self._slot[1] if self._slot is not None else None]
-        return min((t for t in times if t is not None), default=None)
+        # asked after every frame the vehicle handles: plain comparisons, no list or generator
+        best = self._next_stream
+        if self._repeat is not None and (best is None or self._repeat[2] < best):
+            best = self._repeat[2]
+        if self._slot is not None and (best is None or self._slot[1] < best):
+            best = self._slot[1]
+        return best
 
     def poll(self, now: float) -> list[Send]:
         out: list[Send] = []
