@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import attrgetter
 from typing import AbstractSet, Callable, Mapping, Sequence
 
 from .c_numbers import i32, u16
@@ -62,8 +63,12 @@ def _count_ok(v: float) -> bool:
     return math.isfinite(v) and v >= 3 and v == int(v)
 
 
+_PARAM_GETTERS = {n: attrgetter(f"param{n}") for n in (1, 2, 3, 4)}
+
+
 def _param(n: int) -> Callable[[MissionItem], float]:
-    return lambda it: getattr(it, f"param{n}")
+    """Reads param n of an item (made once: rules run for every item of every upload)."""
+    return _PARAM_GETTERS[n]
 
 
 def _positional(it: MissionItem) -> bool:
@@ -100,8 +105,14 @@ def command_rules(mission_commands: MissionCommands, all_plans: bool = False) ->
         mission_commands = (CommandList(None, frozenset(mission_commands)),)
     table = tuple(mission_commands)
 
+    chosen_for: dict[int, CommandList | None] = {}   # frame -> its list, found once per frame
+
     def selected(frame: int) -> CommandList | None:
-        return next((c for c in table if c.frames is None or frame in c.frames), None)
+        try:
+            return chosen_for[frame]
+        except KeyError:
+            chosen = chosen_for[frame] = next((c for c in table if c.frames is None or frame in c.frames), None)
+            return chosen
 
     def known(it: MissionItem) -> bool:
         if it.mission_type is not MissionType.MISSION or all_plans:
@@ -173,8 +184,10 @@ def param_rules(nan_params: NanParams | None) -> tuple[ItemRule, ...]:
     table = {command: frozenset(params) for command, params in nan_params.items()}
 
     def ok(n: int) -> Callable[[MissionItem], bool]:
+        param = _param(n)
+
         def holds(it: MissionItem) -> bool:
-            v = _param(n)(it)
+            v = param(it)
             return math.isfinite(v) or (math.isnan(v) and n in table.get(it.command, ()))
         return holds
 
@@ -197,7 +210,7 @@ _FIELD_RULES: tuple[ItemRule, ...] = (
     ItemRule("current and autocontinue are 0 or 1", MissionResult.INVALID,
              lambda it: True, lambda it: it.current in (0, 1) and it.autocontinue in (0, 1)),
     *(ItemRule(f"param{n} is not infinite", _PARAM_CODES[n],
-               lambda it: True, (lambda n: lambda it: _not_inf(_param(n)(it)))(n))
+               lambda it: True, (lambda param: lambda it: _not_inf(param(it)))(_param(n)))
       for n in (1, 2, 3, 4)),
 )
 _LAT_LON_RULES: tuple[ItemRule, ...] = (
