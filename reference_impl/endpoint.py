@@ -38,6 +38,9 @@ from .wire.signing import Keyring, SigningKey
 MAX_KEPT_ERRORS = 100
 MAX_KEPT_REJECTIONS = 100
 MAX_ADDRESSES = 64   # learned peers kept for broadcasts; the oldest learned one goes first
+# read for every frame received, bound once: on Python 3.11 `SignatureVerdict.UNSIGNED` off
+# the class is a slow metaclass hook
+_UNSIGNED, _VALID = SignatureVerdict.UNSIGNED, SignatureVerdict.VALID
 
 
 @dataclass(frozen=True, slots=True)
@@ -114,12 +117,12 @@ class MavlinkEndpoint:
                 self.decode_errors.append((source, item))
                 self.decode_error_counts[source] += 1
                 continue
-            if (item.signature is not SignatureVerdict.UNSIGNED or self.require_signature) \
+            if (item.signature is not _UNSIGNED or self.require_signature) \
                     and not self._signature_acceptable(item):
                 self._reject(item, source)
                 continue
             peers[(item.src_system, item.src_component)] = source
-            if self.keyring is not None and item.signature is SignatureVerdict.VALID:
+            if self.keyring is not None and item.signature is _VALID:
                 self._link_keys[source] = self.keyring.key_for(item.src_system)
             frames.append(item)
         if frames and source not in self.addresses:

@@ -49,6 +49,7 @@ from .wire.signing import SigningKey
 HEARTBEAT_PERIOD = 1.0
 POSITION_PERIOD = 1.0
 MAX_CONTROL_EVENTS = 1000   # kept for whoever reads them (the mission computer, later)
+_MISSION = MissionType.MISSION   # read per frame: on Python 3.11 a slow lookup off the enum class
 
 
 @dataclass(frozen=True)
@@ -188,9 +189,9 @@ class VehicleNode:
             server = self.server
             if server.handles(name):
                 # the stored mission is a tuple replaced on commit: identity tells a change
-                seq_before, mission_before = server.progress.seq, server.store.items(MissionType.MISSION)
+                seq_before, mission_before = server.progress.seq, server.store.items(_MISSION)
                 self._send(server.handle(frame, now))
-                if server.store.items(MissionType.MISSION) is not mission_before:
+                if server.store.items(_MISSION) is not mission_before:
                     self._plan_changed(now)
                 elif server.progress.seq != seq_before:
                     self.flight.retarget(now)

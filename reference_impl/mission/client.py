@@ -36,7 +36,8 @@ from .adaptations import (CLEAR_TYPES_SEPARATELY, HOME_AT_SEQ0,
                           AWAIT_ACCEPT_AFTER_NACK, NON_ATOMIC_UPLOAD, NONE,
                           RESTART_DOWNLOAD_ON_ERROR, Adaptations,
                           home_placeholder, shift_jumps)
-from .client_replies import (ITEM_DEFECT_CODES, TRANSIENT_COMMAND_RESULTS, TRANSIENT_SET_CURRENT_TEXTS,
+from .client_replies import (_DOWNLOAD, _DOWNLOAD_REQUESTING, _SET_CURRENT, _UPLOAD, _UPLOAD_SENDING,
+                             ITEM_DEFECT_CODES, TRANSIENT_COMMAND_RESULTS, TRANSIENT_SET_CURRENT_TEXTS,
                              ClientReplies, _result)
 from .constants import MissionResult
 from .items import PLAN_TYPES, MissionItem, MissionType, renumber
@@ -199,19 +200,19 @@ class MissionClient(ClientReplies):
             return []
         op = self._op
         if name in (m.REQUEST_INT, m.REQUEST_FLOAT):
-            if op is not None and op.operation is Operation.UPLOAD and msg.mission_type == op.mission_type:
+            if op is not None and op.operation is _UPLOAD and msg.mission_type == op.mission_type:
                 return self._on_request(op, msg, now)
             return self._late_request(op, msg)
         if op is None:
             return []
         if name == "MISSION_ACK":
             return self._on_ack(op, msg, now)
-        if op.operation is Operation.DOWNLOAD:
+        if op.operation is _DOWNLOAD:
             if name == "MISSION_COUNT":
                 return self._on_count(op, msg, now)
             if name in (m.ITEM_INT, m.ITEM_FLOAT):
                 return self._on_item(op, msg, now)
-        if op.operation is Operation.SET_CURRENT:
+        if op.operation is _SET_CURRENT:
             return self._on_set_current_reply(op, msg, name, now)
         return []
 
@@ -288,7 +289,7 @@ class MissionClient(ClientReplies):
         return self._send_and_wait(op, msg, now)
 
     def _timeout_for(self, op: _Op) -> float:
-        if self.state is _S.DOWNLOAD_REQUESTING:
+        if self.state is _DOWNLOAD_REQUESTING:
             return self.timings.item_timeout
         if self._lengthened_wait():
             # A5: wait out the vehicle's own re-request (~1 s on ArduPilot) before resending.
@@ -298,7 +299,7 @@ class MissionClient(ClientReplies):
     def _lengthened_wait(self) -> bool:
         """Whether LONG_VEHICLE_TIMEOUT stretches the wait for the vehicle's next request."""
         interval = self.adaptations.vehicle_request_interval
-        return (self.state is _S.UPLOAD_SENDING and interval is not None
+        return (self.state is _UPLOAD_SENDING and interval is not None
                 and 2 * interval > self.timings.default_timeout)
 
     def _wait_out_vehicle(self, op: _Op, now: float) -> bool:

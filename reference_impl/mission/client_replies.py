@@ -37,6 +37,11 @@ TRANSIENT_SET_CURRENT_TEXTS = ("busy", "in progress")
 TRANSIENT_COMMAND_RESULTS = frozenset({CommandResult.TEMPORARILY_REJECTED})
 
 _S, _E = ClientState, ClientEvent
+# Members read on every frame, bound once (client.py imports them too): on Python 3.11 each
+# read of an enum member off its class (`_S.UPLOAD_SENDING`) is a slow metaclass hook.
+_UPLOAD_SENDING, _DOWNLOAD_REQUESTING = _S.UPLOAD_SENDING, _S.DOWNLOAD_REQUESTING
+_REQUEST, _ITEM, _ITEM_OUT_OF_SEQUENCE = _E.REQUEST, _E.ITEM, _E.ITEM_OUT_OF_SEQUENCE
+_UPLOAD, _DOWNLOAD, _SET_CURRENT = Operation.UPLOAD, Operation.DOWNLOAD, Operation.SET_CURRENT
 
 
 class ClientReplies:
@@ -68,7 +73,7 @@ class ClientReplies:
             return self._finish(now, Outcome.PROTOCOL_ERROR,
                                 unknown=op.last_item_sent or self._upload_unknown(op), detail=(
                 f"vehicle requested items {op.answers} times for a {op.count}-item upload"))
-        self._move(_E.REQUEST)
+        self._move(_REQUEST)
         seq = msg.seq
         if msg._type == m.REQUEST_INT:
             as_int = self.upload_int
@@ -112,13 +117,13 @@ class ClientReplies:
         return self._request_expected(op, now)
 
     def _on_item(self, op: _Op, msg: Any, now: float) -> list[Action]:
-        if self.state is not _S.DOWNLOAD_REQUESTING:
+        if self.state is not _DOWNLOAD_REQUESTING:
             return []
         if msg.seq != op.expected:
             # Seed 000: dropped, and the expected item re-requested. A copy of an item we
             # already have (seq < expected) needs no new request: ours is out and its timer
             # covers a loss. A gap is re-requested at once, without moving the deadline.
-            self._move(_E.ITEM_OUT_OF_SEQUENCE)
+            self._move(_ITEM_OUT_OF_SEQUENCE)
             if msg.seq < op.expected:
                 return []
             # Once per request: a vehicle that keeps answering with the wrong item must not
@@ -140,7 +145,7 @@ class ClientReplies:
             ack = self._to_target(m.ack_message(MissionResult.ERROR, op.mission_type, self.target))
             return [ack] + self._finish(now, Outcome.PROTOCOL_ERROR,
                                         detail=f"item {msg.seq} has x/y that no MISSION_ITEM_INT can hold")
-        self._move(_E.ITEM)
+        self._move(_ITEM)
         op.items.append(item)
         op.expected += 1
         op.consecutive = 0

@@ -37,7 +37,8 @@ from .items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
 from .progress import MissionProgress
 from .store import STORAGE_FORMS, MissionStore
 from .transitions import ALL_SERVER_TRANSITIONS, SlotEvent, SlotState
-from .server_uploads import ServerUploads, _LastAccepted
+from .server_uploads import (_IDLE, _MISSION, _RECEIVING, _REQUEST_VALID, _SENDING,
+                             ServerUploads, _LastAccepted)
 from .upload_counters import UploadCounters
 
 
@@ -127,7 +128,7 @@ class MissionServer(ServerUploads):
         return self._slots[mission_type].partner
 
     def is_idle(self) -> bool:
-        return all(s.state is SlotState.IDLE for s in self._slots.values())
+        return all(s.state is _IDLE for s in self._slots.values())
 
     def handles(self, name: str) -> bool:
         return name in self._handlers
@@ -160,7 +161,7 @@ class MissionServer(ServerUploads):
     def cancel(self, mission_type: MissionType, now: float) -> list[Send]:
         """Vehicle-initiated cancel: tell the partner OPERATION_CANCELLED, go idle."""
         slot = self._slots[mission_type]
-        if slot.state is SlotState.IDLE:
+        if slot.state is _IDLE:
             return []
         partner = slot.partner
         self._abort(slot, SlotEvent.CANCEL)
@@ -169,7 +170,7 @@ class MissionServer(ServerUploads):
     def command_set_current(self, seq_param: float, source: Peer, now: float) -> list[Send]:
         """MAV_CMD_DO_SET_MISSION_CURRENT: COMMAND_ACK, then MISSION_CURRENT or STATUSTEXT."""
         seq = self.progress.seq if seq_param == -1 else seq_param
-        count = self.store.count(MissionType.MISSION)
+        count = self.store.count(_MISSION)
         if not math.isfinite(seq) or seq != int(seq) or not 0 <= seq < count:
             return [Send(m.command_ack_message(Cmd.DO_SET_MISSION_CURRENT, CommandResult.FAILED, source), source),
                     *self._set_current_failed(seq_param, count)]
@@ -184,7 +185,7 @@ class MissionServer(ServerUploads):
         if refusal is not None:
             return refusal
         t = slot.mission_type
-        if slot.state is not SlotState.IDLE:
+        if slot.state is not _IDLE:
             self._leave(slot)
         count = self.store.count(t)
         reply = Send(m.count_message(count, t, src, self._opaque_id(t)), src)
@@ -208,7 +209,7 @@ class MissionServer(ServerUploads):
         b = self.behaviour
         as_int = msg.get_type() == m.REQUEST_INT
         out = [] if as_int else self._warn_legacy(slot, "request", "got MISSION_REQUEST; use MISSION_REQUEST_INT!")
-        if slot.state is SlotState.IDLE:
+        if slot.state is _IDLE:
             if b.stateful_download:
                 return self._stray(t, src)
             # no download state (A14): any request is answered from the stored plan
@@ -216,7 +217,7 @@ class MissionServer(ServerUploads):
             if msg.seq >= self.store.count(t):
                 return out + [Send(m.ack_message(MissionResult.INVALID_SEQUENCE, t, src), src)]
             return out + [Send(m.item_message(self._download_item(t, msg.seq), src, as_int=as_int), src)]
-        if slot.state is not SlotState.SENDING:
+        if slot.state is not _SENDING:
             return []  # our own upload partner asking for items: meaningless, ignore
         seq = msg.seq
         if seq >= self.store.count(t) or (b.sequential_download and seq not in (slot.next_seq, slot.next_seq - 1)):
@@ -227,7 +228,7 @@ class MissionServer(ServerUploads):
         if seq == slot.next_seq:
             slot.next_seq += 1
         slot.deadline = now + b.download_idle_timeout
-        self._move(slot, SlotEvent.REQUEST_VALID)
+        self._move(slot, _REQUEST_VALID)
         return out + [Send(m.item_message(self._download_item(t, seq), src, as_int=as_int), src)]
 
     def _on_ack(self, msg: Any, src: Peer, now: float) -> list[Send]:
@@ -235,9 +236,9 @@ class MissionServer(ServerUploads):
         if t is None:
             return []
         slot = self._slots[t]
-        if slot.state is SlotState.IDLE or slot.partner != src:
+        if slot.state is _IDLE or slot.partner != src:
             return []  # an ACK is never answered: no ACK storms
-        if slot.state is SlotState.SENDING:
+        if slot.state is _SENDING:
             self._move(slot, SlotEvent.ACK)  # the GCS ends its download, whatever the code
             self.stats.downloads_served += 1
             self._leave(slot)
@@ -271,27 +272,27 @@ class MissionServer(ServerUploads):
         if any(self._busy_with_other(self._slots[t], src) for t in types):
             self.stats.denied += 1
             return [Send(m.ack_message(MissionResult.DENIED, reply_type, src), src)]
-        if MissionType.MISSION in types and self.progress.running and not b.clear_while_flying:
+        if _MISSION in types and self.progress.running and not b.clear_while_flying:
             return [Send(m.ack_message(MissionResult.ERROR, reply_type, src), src)]   # A12
-        refused = self._v1_refusal(types[0] if len(types) == 1 else MissionType.MISSION, src)
+        refused = self._v1_refusal(types[0] if len(types) == 1 else _MISSION, src)
         if refused is not None:
             return refused
         out: list[Send] = []
         for t in types:
             slot = self._slots[t]
-            if slot.state is not SlotState.IDLE:
+            if slot.state is not _IDLE:
                 self._leave(slot)
             self._move(slot, SlotEvent.CLEAR)
             self.store.clear(t)
             self._last_accepted.pop(t, None)
-        if MissionType.MISSION in types:
+        if _MISSION in types:
             out += self.progress.plan_replaced(now)
         return [Send(m.ack_message(MissionResult.ACCEPTED, reply_type, src), src)] + out
 
     def _on_set_current(self, msg: Any, src: Peer, now: float) -> list[Send]:
         if self.behaviour.set_current_only_idle and not self.is_idle():
             return [Send(m.statustext_message(Severity.WARNING, "Set current refused: a transfer is in progress"))]
-        count = self.store.count(MissionType.MISSION)
+        count = self.store.count(_MISSION)
         if not 0 <= msg.seq < count:
             return self._set_current_failed(msg.seq, count) if self.behaviour.set_current_failure_text else []
         return self.progress.set_current(msg.seq, now)
@@ -301,11 +302,11 @@ class MissionServer(ServerUploads):
         """Stored item `seq` as a download serves it: item 0 of a mission is the vehicle's
         home when the plan holds it there (A1); `current` says whether it is the current
         mission item (seed 000 field table), whatever the uploading GCS put there."""
-        if seq == 0 and t is MissionType.MISSION and self.behaviour.home_at_seq0:
+        if seq == 0 and t is _MISSION and self.behaviour.home_at_seq0:
             item = self._keep(self.home)
         else:
             item = self.store.items(t)[seq]
-        current = int(t is MissionType.MISSION and seq == self.progress.seq
+        current = int(t is _MISSION and seq == self.progress.seq
                       and self.behaviour.download_current_flag)
         return item if item.current == current else replace(item, current=current)
 
@@ -331,10 +332,10 @@ class MissionServer(ServerUploads):
         if refused is not None:
             return None, refused  # type: ignore[return-value]
         slot = self._slots[t]
-        if not self.behaviour.transfer_owner and slot.state is not SlotState.IDLE:
+        if not self.behaviour.transfer_owner and slot.state is not _IDLE:
             slot.partner = src   # no owner: the transfer answers whoever spoke last
         if self._busy_with_other(slot, src) or (
-                read and slot.state is SlotState.RECEIVING and self.behaviour.deny_reads_during_upload):
+                read and slot.state is _RECEIVING and self.behaviour.deny_reads_during_upload):
             return slot, self._deny(t, src)
         return slot, None
 
@@ -358,14 +359,14 @@ class MissionServer(ServerUploads):
 
     def _plan_type(self, raw: int) -> MissionType | None:
         if self.behaviour.mission_type_ignored:
-            return MissionType.MISSION
+            return _MISSION
         t = PLAN_TYPE_BY_VALUE.get(raw)
         if t is None or t not in self.behaviour.supported_types:
             return None
         return t
 
     def _busy_with_other(self, slot: _Transfer, src: Peer) -> bool:
-        return slot.state is not SlotState.IDLE and slot.partner != src
+        return slot.state is not _IDLE and slot.partner != src
 
     def _addressed_to_us(self, msg: Any) -> bool:
         ts = getattr(msg, "target_system", 0)
@@ -375,14 +376,14 @@ class MissionServer(ServerUploads):
         return ts in (0, self.system) and tc in (0, self.component)
 
     def _abort(self, slot: _Transfer, event: SlotEvent) -> None:
-        if slot.state is SlotState.RECEIVING:
+        if slot.state is _RECEIVING:
             self.stats.uploads_failed += 1
         self._move(slot, event)
         self._leave(slot)
 
     def _leave(self, slot: _Transfer) -> None:
         """Forget the transfer's bookkeeping (the stored plan is untouched)."""
-        if slot.state is not SlotState.IDLE:
+        if slot.state is not _IDLE:
             self._move(slot, SlotEvent.SUPERSEDED)
         slot.partner, slot.deadline, slot.received, slot.count, slot.expected = None, None, [], 0, 0
 

@@ -25,6 +25,14 @@ from .validation import first_defect
 if TYPE_CHECKING:
     from .server import ServerStats, _Transfer
 
+# Enum members read on every frame, bound once (server.py imports them too): on Python 3.11
+# each read of a member off its class (`SlotState.IDLE`) goes through the enum metaclass's
+# slow attribute hook.
+_IDLE, _RECEIVING, _SENDING = SlotState.IDLE, SlotState.RECEIVING, SlotState.SENDING
+_REQUEST_VALID, _ITEM_NEXT = SlotEvent.REQUEST_VALID, SlotEvent.ITEM_NEXT
+_TIMEOUT_RETRY, _ITEM_OUT_OF_SEQUENCE = SlotEvent.TIMEOUT_RETRY, SlotEvent.ITEM_OUT_OF_SEQUENCE
+_MISSION = MissionType.MISSION
+
 
 @dataclass
 class _LastAccepted:
@@ -54,7 +62,7 @@ class ServerUploads:
         if refusal is not None:
             return refusal
         t = slot.mission_type
-        if slot.state is not SlotState.IDLE:
+        if slot.state is not _IDLE:
             self._leave(slot)  # the partner moved on: its old transfer is void
         # A new upload begins: late copies of the previous one's items no longer prove
         # anything about what is stored, so they must not draw a repeated ACCEPTED.
@@ -82,7 +90,7 @@ class ServerUploads:
         if refusal is not None:
             return refusal
         t = slot.mission_type
-        if slot.state is not SlotState.IDLE:
+        if slot.state is not _IDLE:
             self._leave(slot)
         stored = self.store.count(t)
         start, end = msg.start_index, msg.end_index
@@ -105,9 +113,9 @@ class ServerUploads:
         if refusal is not None:
             return refusal
         t = slot.mission_type
-        if slot.state is SlotState.IDLE:
+        if slot.state is _IDLE:
             return self._stray_item(msg, t, src, now)
-        if slot.state is not SlotState.RECEIVING:
+        if slot.state is not _RECEIVING:
             return []  # an item from our own download partner means nothing; ignore it
         b = self.behaviour
         slot.last_heard = now
@@ -136,7 +144,7 @@ class ServerUploads:
                         else self._spliced(t, item.seq, [item]))
         if len(slot.received) < slot.count:
             slot.expected += 1
-            self._move(slot, SlotEvent.ITEM_NEXT)
+            self._move(slot, _ITEM_NEXT)
             return out + self._request(slot, now)
         items = slot.received
         if slot.partial:
@@ -147,7 +155,7 @@ class ServerUploads:
 
     # --- timers ---------------------------------------------------------------------------
     def _on_timeout(self, slot: _Transfer, now: float) -> list[Send]:
-        if slot.state is SlotState.SENDING:
+        if slot.state is _SENDING:
             self._move(slot, SlotEvent.TIMEOUT_GIVE_UP)  # the GCS went quiet; it drives retries
             self._leave(slot)
             return []
@@ -158,7 +166,7 @@ class ServerUploads:
             slot.retries += 1
             self.stats.retries += 1
             self.stats.max_consecutive_retries = max(self.stats.max_consecutive_retries, slot.retries)
-            self._move(slot, SlotEvent.TIMEOUT_RETRY)
+            self._move(slot, _TIMEOUT_RETRY)
             return self._request(slot, now, reset_retries=False)
         partner, t = slot.partner, slot.mission_type
         self._move(slot, SlotEvent.TIMEOUT_GIVE_UP)
@@ -181,7 +189,7 @@ class ServerUploads:
         expected one (a gap) is re-requested at once. Neither moves the deadline or resets
         the retry count: only progress does, so a peer that keeps sending the wrong item
         cannot hold the transfer open."""
-        self._move(slot, SlotEvent.ITEM_OUT_OF_SEQUENCE)
+        self._move(slot, _ITEM_OUT_OF_SEQUENCE)
         b = self.behaviour
         out = []
         if b.out_of_sequence_reply is not None:
@@ -226,7 +234,7 @@ class ServerUploads:
         else:
             self._last_accepted.pop(t, None)
         out = [Send(m.ack_message(MissionResult.ACCEPTED, t, src, opaque_id), src)]
-        if t is MissionType.MISSION:
+        if t is _MISSION:
             out += self.progress.plan_replaced(now)
         return out
 
@@ -244,7 +252,7 @@ class ServerUploads:
             return self._continued_upload(msg, t, src)
         code = self.behaviour.foreign_type_item_reply
         if code is not None:
-            running = next((s for s in self._slot_list if s.state is SlotState.RECEIVING
+            running = next((s for s in self._slot_list if s.state is _RECEIVING
                             and s.partner == src), None)
             if running is not None:   # P7: an item of another type than the partner's upload
                 running.last_heard = now

@@ -33,6 +33,13 @@ COMMANDS_BY_TYPE = {
     MissionType.FENCE: FENCE_COMMANDS,
     MissionType.RALLY: RALLY_COMMANDS,
 }
+# Enum members the rules read for every item, bound once: on Python 3.11 each read of a
+# member off its class (`Cmd.DO_JUMP`) goes through the enum metaclass's slow attribute hook.
+_MISSION = MissionType.MISSION
+_NAV_WAYPOINT, _DO_JUMP = Cmd.NAV_WAYPOINT, Cmd.DO_JUMP
+_POLYGON_VERTICES = (Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION, Cmd.NAV_FENCE_POLYGON_VERTEX_EXCLUSION)
+_CIRCLES = (Cmd.NAV_FENCE_CIRCLE_INCLUSION, Cmd.NAV_FENCE_CIRCLE_EXCLUSION)
+_ROI_COMMANDS = (Cmd.NAV_ROI, Cmd.DO_SET_ROI)
 COMMAND_RULE = "command known for its mission type"
 FRAME_LIST_RULE = "frame selects a command list"
 LOCATION_FRAME_RULE = "a location in a frame the vehicle takes"
@@ -72,11 +79,11 @@ def _param(n: int) -> Callable[[MissionItem], float]:
 
 
 def _positional(it: MissionItem) -> bool:
-    return it.command in POSITIONAL_COMMANDS or it.mission_type != MissionType.MISSION
+    return it.command in POSITIONAL_COMMANDS or it.mission_type != _MISSION
 
 
 def _in_mission(it: MissionItem) -> bool:
-    return it.mission_type is MissionType.MISSION
+    return it.mission_type is _MISSION
 
 
 @dataclass(frozen=True)
@@ -99,7 +106,7 @@ def command_rules(mission_commands: MissionCommands, all_plans: bool = False) ->
     items too (their commands must then be in the frame's list), as PX4's one parser does."""
     if mission_commands is None:
         return (ItemRule("fence and rally commands known", MissionResult.UNSUPPORTED,
-                         lambda it: it.mission_type is not MissionType.MISSION,
+                         lambda it: it.mission_type is not _MISSION,
                          lambda it: it.command in COMMANDS_BY_TYPE[it.mission_type]),)
     if isinstance(mission_commands, AbstractSet):
         mission_commands = (CommandList(None, frozenset(mission_commands)),)
@@ -115,11 +122,11 @@ def command_rules(mission_commands: MissionCommands, all_plans: bool = False) ->
             return chosen
 
     def known(it: MissionItem) -> bool:
-        if it.mission_type is not MissionType.MISSION or all_plans:
+        if it.mission_type is not _MISSION or all_plans:
             # a table shared by every plan type still holds each type to its own commands
             if it.command not in COMMANDS_BY_TYPE[it.mission_type]:
                 return False
-            if it.mission_type is not MissionType.MISSION and not all_plans:
+            if it.mission_type is not _MISSION and not all_plans:
                 return True
         chosen = selected(it.frame)
         return chosen is not None and it.command in chosen.commands
@@ -223,23 +230,22 @@ _LAT_LON_RULES: tuple[ItemRule, ...] = (
 _ALTITUDE_FINITE = ItemRule("altitude finite", MissionResult.INVALID_PARAM7,
                             _positional, lambda it: math.isfinite(it.z))
 _HOLD_TIME = ItemRule("waypoint hold time >= 0", MissionResult.INVALID_PARAM1,
-                      lambda it: it.command == Cmd.NAV_WAYPOINT,
+                      lambda it: it.command == _NAV_WAYPOINT,
                       lambda it: math.isnan(it.param1) or it.param1 >= 0)
 _FENCE_VALUE_RULES: tuple[ItemRule, ...] = (
     ItemRule("fence polygon vertex count is an integer >= 3", MissionResult.INVALID_PARAM1,
-             lambda it: it.command in (Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION,
-                                       Cmd.NAV_FENCE_POLYGON_VERTEX_EXCLUSION),
+             lambda it: it.command in _POLYGON_VERTICES,
              lambda it: _count_ok(it.param1)),
     ItemRule("fence circle radius > 0", MissionResult.INVALID_PARAM1,
-             lambda it: it.command in (Cmd.NAV_FENCE_CIRCLE_INCLUSION, Cmd.NAV_FENCE_CIRCLE_EXCLUSION),
+             lambda it: it.command in _CIRCLES,
              lambda it: math.isfinite(it.param1) and it.param1 > 0),
 )
 _JUMP_RULES: tuple[ItemRule, ...] = (
     ItemRule("jump target is a whole seq >= 0", MissionResult.INVALID_PARAM1,
-             lambda it: it.command == Cmd.DO_JUMP,
+             lambda it: it.command == _DO_JUMP,
              lambda it: math.isfinite(it.param1) and it.param1 >= 0 and it.param1 == int(it.param1)),
     ItemRule("jump repeat count >= -1", MissionResult.INVALID_PARAM2,
-             lambda it: it.command == Cmd.DO_JUMP,
+             lambda it: it.command == _DO_JUMP,
              lambda it: math.isfinite(it.param2) and it.param2 >= -1),
 )
 _COMMAND_VALUE_RULES: tuple[ItemRule, ...] = (_HOLD_TIME, *_FENCE_VALUE_RULES, *_JUMP_RULES)
@@ -272,17 +278,17 @@ def rules_for(mission_commands: MissionCommands = MISSION_COMMANDS,
 # a region of interest's mode must be one its frame knows (L1480-1491: global frames
 # MAV_ROI_LOCATION or NONE; L1574-1581: MAV_FRAME_MISSION NONE, WPNEXT or WPINDEX)
 _PX4_ROI = ItemRule("region-of-interest mode known for the frame", MissionResult.INVALID_PARAM1,
-                    lambda it: _in_mission(it) and it.command in (Cmd.NAV_ROI, Cmd.DO_SET_ROI),
+                    lambda it: _in_mission(it) and it.command in _ROI_COMMANDS,
                     lambda it: i32(it.param1) in ((0, 1, 2) if it.frame == FRAME_MISSION else (0, 3)))
 # ArduCopter (531699d6): a waypoint's hold time is a uint16 (AP_Mission.cpp L1104-1106:
 # INVALID_PARAM1 outside 0..65535); DO_JUMP's target is a uint16 and must name an item after
 # home (MissionItemProtocol_Waypoints.cpp L40-44: target 0 gets MAV_MISSION_ERROR; a target past
 # the upload's end too, which one item cannot show); its repeat count is not checked
 _AP_HOLD = ItemRule("waypoint hold time within 0..65535 s", MissionResult.INVALID_PARAM1,
-                    lambda it: it.command == Cmd.NAV_WAYPOINT and _in_mission(it),
+                    lambda it: it.command == _NAV_WAYPOINT and _in_mission(it),
                     lambda it: math.isnan(it.param1) or 0 <= it.param1 <= 65535)
 _AP_JUMP = ItemRule("jump target after home", MissionResult.ERROR,
-                    lambda it: it.command == Cmd.DO_JUMP and _in_mission(it),
+                    lambda it: it.command == _DO_JUMP and _in_mission(it),
                     lambda it: u16(it.param1) != 0)
 # value_rules -> (the altitude rule, the per-command value rules)
 VALUE_RULES: dict[str, tuple[tuple[ItemRule, ...], tuple[ItemRule, ...]]] = {
