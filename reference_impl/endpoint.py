@@ -163,7 +163,9 @@ class MavlinkEndpoint:
             return
         data = self.encoder.encode(msg)
         if to is not None:
-            address = self._address_of(to)
+            address = self.peers.get(to)   # the usual case, without a call; else by system
+            if address is None:
+                address = self._address_of(to)
             if address is not None:
                 self._outbox.append((data, address))
                 return

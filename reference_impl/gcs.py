@@ -172,10 +172,15 @@ class GcsNode:
 
     def next_deadline(self) -> float | None:
         best = self._next_heartbeat
-        for engine in (self.client, self.control, self.handover if self.control is not None else None):
-            t = engine.next_deadline() if engine is not None else None
-            if t is not None and (best is None or t < best):
-                best = t
+        client = self.client    # asked after every datagram: the usual engine first, no tuple
+        t = client.next_deadline() if client is not None else None
+        if t is not None and (best is None or t < best):
+            best = t
+        if self.control is not None:
+            for engine in (self.control, self.handover):
+                t = engine.next_deadline() if engine is not None else None
+                if t is not None and (best is None or t < best):
+                    best = t
         return best
 
     def take_outgoing(self) -> list[tuple[bytes, Address]]:

@@ -328,9 +328,10 @@ class MissionServer(ServerUploads):
         t = self._plan_type(msg.mission_type)
         if t is None:
             return None, self._unsupported(msg.mission_type, src)  # type: ignore[return-value]
-        refused = self._v1_refusal(t, src)
-        if refused is not None:
-            return None, refused  # type: ignore[return-value]
+        if self._frame_version == 1:   # only a MAVLink 1 frame can be refused for its version
+            refused = self._v1_refusal(t, src)
+            if refused is not None:
+                return None, refused  # type: ignore[return-value]
         slot = self._slots[t]
         if not self.behaviour.transfer_owner and slot.state is not _IDLE:
             slot.partner = src   # no owner: the transfer answers whoever spoke last
