@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from .codec import default_dialect
+from .dialect import mavlink as _dialect
 
-_X25 = default_dialect().x25crc
+_X25 = _dialect.x25crc
 _CRC_CACHE: dict[tuple[bytes, int], int] = {}
 
 

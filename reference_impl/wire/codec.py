@@ -24,6 +24,7 @@ import struct
 import time
 from typing import Any, Callable, Iterable
 
+from .checksum import crc16
 from .frame import DecodeError, Frame, SignatureFault, SignatureVerdict
 from .signing import NEW_STREAM_WINDOW, Keyring, SigningKey, signing_timestamp
 
@@ -132,6 +133,7 @@ class FrameDecoder:
         self._keyring: Keyring | None = None
         self._by_system: dict[int, Any] = {}   # with a keyring: one keyed decoder per system id
         self._unknown = self.dialect.MAVLink_unknown
+        self._ignore_crc = bool(getattr(self.dialect, "MAVLINK_IGNORE_CRC", 0))
         self.frames = 0
         self.errors = 0
         self.bad_signatures = 0
@@ -210,9 +212,65 @@ class FrameDecoder:
             out.append(self._error("bytes outside any frame", data[garbage_start:]))
         return out
 
+    def accepted(self, data: bytes) -> list[tuple[int, int, int, SignatureVerdict]]:
+        """(offset, length, msgid, verdict) of each frame `feed` would return as a `Frame`, with
+        the same effect on the signing state, but no message built: what a caller that only
+        asks which frames a receiver accepts needs (the frame fuzzer's admission rule decodes
+        every datagram it sends). Frames split exactly as in `feed`; counters are not kept."""
+        out: list[tuple[int, int, int, SignatureVerdict]] = []
+        n = len(data)
+        i = 0
+        while i < n:
+            magic = data[i]
+            if magic != MAGIC_V2 and magic != MAGIC_V1:
+                i += 1
+                continue
+            if i + 2 >= n and (magic == MAGIC_V2 or i + 1 >= n):
+                break                                   # truncated frame header
+            plen = data[i + 1]
+            if magic == MAGIC_V2:
+                iflags = data[i + 2]
+                total = plen + V2_OVERHEAD + (SIGNATURE_LEN if iflags & IFLAG_SIGNED else 0)
+            else:
+                iflags = 0
+                total = plen + V1_OVERHEAD
+            if i + total > n:
+                break                                   # truncated frame
+            if not iflags & ~IFLAG_SIGNED:
+                chunk = data[i:i + total]
+                signed = bool(iflags & IFLAG_SIGNED)
+                mav, stream_key, saved_ts, stale, no_key = self._signing_context(chunk, signed)
+                msgid = self._check(chunk, iflags)
+                if msgid.__class__ is int:
+                    sig_ok = stream_key is not None and bool(mav.check_signature(chunk, chunk[5], chunk[6]))
+                    verdict, _ = self._verdict(mav, chunk, signed, no_key, stream_key, saved_ts, stale, sig_ok)
+                    out.append((i, total, msgid, verdict))
+            i += total
+        return out
+
     def _decode_one(self, chunk: bytes, iflags: int) -> Frame | DecodeError:
-        mav = self._mav
         signed = bool(iflags & IFLAG_SIGNED)
+        mav, stream_key, saved_ts, stale, no_key = self._signing_context(chunk, signed)
+        checked = self._check(chunk, iflags)
+        if checked.__class__ is str:       # pymavlink would refuse it the same way: no need to ask
+            return self._error(checked, chunk)
+        try:
+            msg = mav.decode(bytearray(chunk))
+        except Exception as exc:  # pymavlink raises MAVError, struct.error, ValueError...
+            return self._error(_reason(exc), chunk)
+        if isinstance(msg, self._unknown):
+            # pymavlink's MAVLink_unknown carries id -2 in its header; read the id off the wire.
+            msgid = chunk[5] if chunk[0] == MAGIC_V1 else chunk[7] | chunk[8] << 8 | chunk[9] << 16
+            return self._error(f"unknown message id {msgid}", chunk)
+        verdict, fault = self._verdict(mav, chunk, signed, no_key, stream_key, saved_ts, stale, msg._signed)
+        self.frames += 1
+        h = msg._header
+        return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None, fault)
+
+    def _signing_context(self, chunk: bytes, signed: bool) -> tuple[Any, Any, int | None, bool, bool]:
+        """(pymavlink decoder, stream key, its saved timestamp, stale, no key) for a frame,
+        before pymavlink sees it; moves the decoder's own timestamp to now."""
+        mav = self._mav
         stream_key = saved_ts = None
         stale = no_key = False
         if signed and self._keyring is not None:
@@ -233,35 +291,46 @@ class FrameDecoder:
             # pymavlink's timestamp rules, read ahead so a refusal can say "replayed"
             ts = int.from_bytes(chunk[-12:-6], "little")
             stale = ts <= saved_ts if saved_ts is not None else ts + NEW_STREAM_WINDOW < mav.signing.timestamp
-        try:
-            msg = mav.decode(bytearray(chunk))
-        except Exception as exc:  # pymavlink raises MAVError, struct.error, ValueError...
-            return self._error(_reason(exc), chunk)
-        if isinstance(msg, self._unknown):
-            # pymavlink's MAVLink_unknown carries id -2 in its header; read the id off the wire.
-            msgid = chunk[5] if chunk[0] == MAGIC_V1 else chunk[7] | chunk[8] << 8 | chunk[9] << 16
-            return self._error(f"unknown message id {msgid}", chunk)
-        fault = None
-        if not signed:
-            verdict = SignatureVerdict.UNSIGNED
-        elif no_key:
-            verdict, fault = SignatureVerdict.INVALID, SignatureFault.UNKNOWN_KEY
-            self.bad_signatures += 1
-        elif stream_key is None:
-            verdict = SignatureVerdict.UNCHECKED
-        elif msg._signed:
-            verdict = SignatureVerdict.VALID
+        return mav, stream_key, saved_ts, stale, no_key
+
+    def _check(self, chunk: bytes, iflags: int) -> int | str:
+        """The msgid of a framed chunk (known incompat flags) whose msgid and checksum pass,
+        else why not, as pymavlink's decode says it (it checks them first, before any state
+        of its own changes)."""
+        if chunk[0] == MAGIC_V1:
+            msgid, crc_at = chunk[5], len(chunk) - 2
         else:
-            verdict = SignatureVerdict.INVALID
+            msgid = chunk[7] | chunk[8] << 8 | chunk[9] << 16
+            crc_at = len(chunk) - (2 + SIGNATURE_LEN if iflags & IFLAG_SIGNED else 2)
+        cls = self.dialect.mavlink_map.get(msgid)
+        if cls is None:
+            return f"unknown message id {msgid}"
+        crc = chunk[crc_at] | chunk[crc_at + 1] << 8
+        good = crc16(chunk[1:crc_at], cls.crc_extra)
+        if crc != good and not self._ignore_crc:
+            return f"invalid MAVLink CRC in msgID {msgid} 0x{crc:04x} should be 0x{good:04x}"
+        return msgid
+
+    def _verdict(self, mav: Any, chunk: bytes, signed: bool, no_key: bool, stream_key: Any,
+                 saved_ts: int | None, stale: bool, sig_ok: bool) -> tuple[SignatureVerdict, SignatureFault | None]:
+        """The signature verdict of a frame pymavlink took; a refused signature's stream
+        timestamp is put back (pymavlink records it before it compares signatures)."""
+        if not signed:
+            return SignatureVerdict.UNSIGNED, None
+        if no_key:
             self.bad_signatures += 1
-            if saved_ts is None:
-                mav.signing.stream_timestamps.pop(stream_key, None)
-            else:
-                mav.signing.stream_timestamps[stream_key] = saved_ts
-            fault = SignatureFault.REPLAYED if stale and self._genuine(mav, chunk) else SignatureFault.BAD_SIGNATURE
-        self.frames += 1
-        h = msg._header
-        return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None, fault)
+            return SignatureVerdict.INVALID, SignatureFault.UNKNOWN_KEY
+        if stream_key is None:
+            return SignatureVerdict.UNCHECKED, None
+        if sig_ok:
+            return SignatureVerdict.VALID, None
+        self.bad_signatures += 1
+        if saved_ts is None:
+            mav.signing.stream_timestamps.pop(stream_key, None)
+        else:
+            mav.signing.stream_timestamps[stream_key] = saved_ts
+        return SignatureVerdict.INVALID, (SignatureFault.REPLAYED if stale and self._genuine(mav, chunk)
+                                          else SignatureFault.BAD_SIGNATURE)
 
     def _genuine(self, mav: Any, chunk: bytes) -> bool:
         """Whether the signature itself is right for `mav`'s key, whatever its timestamp: the
