@@ -68,7 +68,7 @@ from bisect import bisect_right
 from collections import deque
 from typing import Any, Callable, Iterable
 
-from mavconform.reference_impl.wire.codec import FrameDecoder
+from mavconform.reference_impl.wire.codec import MAGIC_V2, FrameDecoder
 from mavconform.reference_impl.wire.cparser import OK, PARSE_CHAR, VARIANTS, CParser, MessageTable, ParsedFrame
 from mavconform.reference_impl.wire.frame import Frame, SignatureVerdict
 from mavconform.reference_impl.wire.signing import SigningKey
@@ -80,6 +80,9 @@ INERT: frozenset[str] = frozenset({
     "MISSION_ITEM_INT", "MISSION_CURRENT", "MISSION_ITEM_REACHED", "STATUSTEXT",
     "GLOBAL_POSITION_INT", "COMMAND_ACK",
 })
+
+INVALID, VALID = SignatureVerdict.INVALID, SignatureVerdict.VALID
+V2_HEADER, V1_HEADER = 10, 6   # bytes before the payload
 
 ROUNDS = 16                 # re-parses of one datagram after flips, at most
 FILLERS = (0x00, 0x55, 0xAA, 0x11, 0x77, 0x33, 0xCC, 0x01)   # never 0xFD / 0xFE
@@ -241,19 +244,20 @@ class Admission:
     def _decoder_offending(self, data: bytes, decoder: FrameDecoder,
                            already: set[int] | None = None) -> list[int]:
         """Offsets of the first checksum byte of each frame the per-datagram decoder accepts
-        whose message is not INERT (the second byte if the first was flipped already)."""
+        whose message is not INERT (the second byte if the first was flipped already).
+        `FrameDecoder.accepted`: what `feed` would accept, without building the messages."""
         out = []
-        pos = 0
-        for item in decoder.feed(data):
-            if item.__class__ is Frame and item.msg._type not in self.inert and self.accepts(item):
-                at = pos + wire.crc_offset(item.raw)
-                if already is not None and at in already:
-                    at += 1
-                    if at in already:
-                        pos += len(item.raw)
-                        continue    # both flipped: it cannot be accepted any more
-                out.append(at)
-            pos += len(item.raw)
+        inert = self._inert_ids
+        require = self.require_signature
+        for pos, _, msgid, verdict in decoder.accepted(data):
+            if msgid in inert or verdict is INVALID or (require and verdict is not VALID):
+                continue
+            at = pos + (V2_HEADER if data[pos] == MAGIC_V2 else V1_HEADER) + data[pos + 1]
+            if already is not None and at in already:
+                at += 1
+                if at in already:
+                    continue    # both flipped: it cannot be accepted any more
+            out.append(at)
         return out
 
     def _stream_offending(self, models: Models, data: bytes) -> tuple[Models, list[tuple[ParsedFrame, int]]]:
