@@ -197,9 +197,11 @@ class CParser:
         return new
 
     def same_state(self, other: "CParser") -> bool:
-        """Would `other` parse the next bytes as this one does, but for its variant?"""
-        return (self.offset == other.offset and self._buf == other._buf and self._start == other._start
-                and self._v1 == other._v1 and self.table is other.table and self._secret == other._secret
+        """Would `other` parse the next bytes as this one does, but for its variant? (IDLE, the
+        last frame's start and v1 flag are left over: the next start byte sets both.)"""
+        return (self.offset == other.offset and self._buf == other._buf
+                and (not self._buf or (self._start == other._start and self._v1 == other._v1))
+                and self.table is other.table and self._secret == other._secret
                 and self.accept_unsigned == other.accept_unsigned and self._timestamp == other._timestamp
                 and self._streams == other._streams)
 
