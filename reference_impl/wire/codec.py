@@ -180,7 +180,7 @@ class FrameDecoder:
             if magic != MAGIC_V2 and magic != MAGIC_V1:
                 if garbage_start < 0:
                     garbage_start = i
-                i += 1
+                i = _next_start(data, i + 1)
                 continue
             if garbage_start >= 0:
                 out.append(self._error("bytes outside any frame", data[garbage_start:i]))
@@ -218,12 +218,13 @@ class FrameDecoder:
         asks which frames a receiver accepts needs (the frame fuzzer's admission rule decodes
         every datagram it sends). Frames split exactly as in `feed`; counters are not kept."""
         out: list[tuple[int, int, int, SignatureVerdict]] = []
+        keyless = self._keyring is None and self._mav.signing.secret_key is None
         n = len(data)
         i = 0
         while i < n:
             magic = data[i]
             if magic != MAGIC_V2 and magic != MAGIC_V1:
-                i += 1
+                i = _next_start(data, i + 1)
                 continue
             if i + 2 >= n and (magic == MAGIC_V2 or i + 1 >= n):
                 break                                   # truncated frame header
@@ -236,7 +237,11 @@ class FrameDecoder:
                 total = plen + V1_OVERHEAD
             if i + total > n:
                 break                                   # truncated frame
-            if not iflags & ~IFLAG_SIGNED:
+            if keyless and not iflags & ~IFLAG_SIGNED:       # no signing state: verdict by the flag
+                msgid = self._check(data[i:i + total], iflags)
+                if msgid.__class__ is int:
+                    out.append((i, total, msgid, UNCHECKED if iflags else UNSIGNED))
+            elif not iflags & ~IFLAG_SIGNED:
                 chunk = data[i:i + total]
                 signed = bool(iflags & IFLAG_SIGNED)
                 mav, stream_key, saved_ts, stale, no_key = self._signing_context(chunk, signed)
@@ -344,6 +349,18 @@ class FrameDecoder:
     def _error(self, reason: str, raw: bytes) -> DecodeError:
         self.errors += 1
         return DecodeError(reason, bytes(raw))
+
+
+UNSIGNED, UNCHECKED = SignatureVerdict.UNSIGNED, SignatureVerdict.UNCHECKED
+
+
+def _next_start(data: bytes, i: int) -> int:
+    """Where the next start byte (0xFD, 0xFE) at or after `i` is; len(data) if none."""
+    a = data.find(b"\xfd", i)
+    b = data.find(b"\xfe", i)
+    if a < 0:
+        return b if b >= 0 else len(data)
+    return a if b < 0 or a < b else b
 
 
 _BASE_LENGTHS: dict[type, int] = {}
