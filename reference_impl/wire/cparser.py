@@ -131,6 +131,7 @@ class MessageTable:
 
 
 DIALECT_TABLE = MessageTable.of(default_dialect())   # our own dialect, as the frame fuzzer uses it
+_frame = tuple.__new__   # ParsedFrame without its Python-level __new__ (the parser's hot loop)
 
 class ParsedFrame(NamedTuple):
     """A frame the parser completed (or, from `awaiting_signature`, is completing).
@@ -273,7 +274,7 @@ class CParser:
                     continue
             else:
                 iflags = 0
-            crc_at = p + _HEADER[v1] + buf[p]
+            crc_at = p + (5 if v1 else 9) + buf[p]
             if n < crc_at + 2:
                 break
             if v1:
@@ -299,8 +300,8 @@ class CParser:
                 result = OK if crc_ok else BAD_CRC
                 if result == OK and self._secret is not None and not signed and not self.accept_unsigned:
                     result = BAD_SIGNATURE
-            out.append(ParsedFrame(base + start, base + end, base + crc_at, msgid, result, v1, signed,
-                                   buf[p + 2 if v1 else p + 4], buf[p + 3 if v1 else p + 5]))
+            out.append(_frame(ParsedFrame, (base + start, base + end, base + crc_at, msgid, result, v1, signed,
+                                            buf[p + 2 if v1 else p + 4], buf[p + 3 if v1 else p + 5])))
             if result != OK and buf[end - 1] == STX_V2:
                 self.diverged = True
                 if restart:
@@ -364,11 +365,13 @@ class CParser:
         good (without a key, or with `accept_unsigned`, the next bytes then complete it as
         OK whatever they are: see `takes_any_signature`), BAD_CRC if not; `end` is where it
         will end."""
+        buf = self._buf
+        if self._v1 or len(buf) < 12 or not buf[2] & IFLAG_SIGNED:
+            return None                 # no signed frame with its checksum in
         head = self._pending_header()
         if head is None:
             return None
         crc_at, msgid, signed, _ = head
-        buf = self._buf
         if not signed or len(buf) < crc_at + 2:
             return None
         entry = self.table.entries.get(msgid)
