@@ -74,6 +74,7 @@ from mavconform.reference_impl.wire.frame import Frame, SignatureVerdict
 from mavconform.reference_impl.wire.signing import SigningKey
 
 from . import wire
+from .stream_models import Models, bytes_to_idle, stream_offending
 
 INERT: frozenset[str] = frozenset({
     "HEARTBEAT", "MISSION_ACK", "MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ITEM",
@@ -118,11 +119,6 @@ def _ids(names: frozenset[str]) -> frozenset[int]:
 
 
 _INERT_IDS = _ids(INERT)
-
-# The stream models: the C parser's variants, grouped while they are in the same state (they
-# part only on rare frames: see CParser.diverged), so each datagram is parsed once per group.
-Models = list[tuple[tuple[str, ...], CParser]]
-
 
 class Admission:
     """Decodes each datagram as the target would and neutralises what must not go out."""
@@ -173,11 +169,27 @@ class Admission:
     # --- fuzz datagrams ---------------------------------------------------------------------
     def admit(self, frames: list[bytes]) -> tuple[list[bytes], list[int]]:
         """The frames to send as one datagram, and the indexes of those neutralised."""
-        data = cur = b"".join(frames)
+        data = b"".join(frames)
+        offending = self._decoder_offending(data, self.decoder)
+        first = None
+        if not offending:
+            first = self._stream_offending(self._plan, data)
+            if not first[1]:      # the usual datagram: nothing to neutralise
+                self._plan = first[0]
+                self.last_filled = []
+                self._queue.append((data, first[0]))
+                return frames, []
+        return self._neutralise(frames, data, offending, first)
+
+    def _neutralise(self, frames: list[bytes], data: bytes, offending: list[int],
+                    first: tuple[Models, list[tuple[ParsedFrame, int]]] | None) -> tuple[list[bytes], list[int]]:
+        """`admit` for a datagram with offending frames: flip, re-parse, settle or fill.
+        `first`: the stream models' verdict on `data` already (when no decoder flips)."""
+        cur = data
         n = len(data)
         buf = bytearray(data)
         flipped: set[int] = set()
-        for at in self._decoder_offending(data, self.decoder):
+        for at in offending:
             buf[at] ^= 0xFF
             flipped.add(at)
         if flipped:
@@ -185,8 +197,8 @@ class Admission:
         models: Models | None = None
         spans: list[tuple[int, int]] = []
         recheck = False
-        for _ in range(ROUNDS):
-            trial, hits = self._stream_offending(self._plan, cur)
+        for r in range(ROUNDS):
+            trial, hits = first if r == 0 and first is not None else self._stream_offending(self._plan, cur)
             todo: set[int] = set()
             stuck = False
             for frame, base in hits:
@@ -261,37 +273,8 @@ class Admission:
         return out
 
     def _stream_offending(self, models: Models, data: bytes) -> tuple[Models, list[tuple[ParsedFrame, int]]]:
-        """The models fed with `data` (copies), and every offending frame with the stream
-        offset `data` started at: completed OK, or pending with a good checksum that any
-        signature bytes complete, and not INERT. (The same frame may come twice, once per
-        variant.)"""
-        trial: Models = []
-        hits: list[tuple[ParsedFrame, int]] = []
-        inert = self._inert_ids
-        for variants, m in models:
-            t = m.copy()
-            base = t.offset
-            frames = t.feed(data, variants[0])
-            if len(variants) == 1 or not t.diverged:     # the usual case, inline
-                for f in frames:
-                    if f.result == OK and f.msgid not in inert:
-                        hits.append((f, base))
-                if t._buf:
-                    p = t.awaiting_signature()
-                    if p is not None and p.msgid not in inert:
-                        hits.append((p, base))
-                trial.append((variants, t))
-                continue
-            # a frame the variants part on: the others parse on their own from here
-            _offending(frames, t, base, hits, inert)
-            trial.append((variants[:1], t))
-            for v in variants[1:]:
-                tv = m.copy()
-                _offending(tv.feed(data, v), tv, base, hits, inert)
-                trial.append(((v,), tv))
-        if len(trial) > 1:
-            trial = _merged(trial)
-        return trial, hits
+        """`stream_offending` (stream_models.py) with this rule's INERT messages."""
+        return stream_offending(models, data, self._inert_ids)
 
     def _fill(self, buf: bytearray, spans: list[tuple[int, int]]) -> tuple[bytearray, Models, set[int]]:
         """The flips did not settle: replace the offending frames' bytes in this datagram
@@ -360,7 +343,7 @@ class Admission:
             trial, hits = self._stream_offending(self._wire, chunk)
             if hits or not all(t.idle for _, t in trial):
                 continue
-            need = max(_bytes_to_idle(m, v, filler) for variants, m in self._wire for v in variants)
+            need = max(bytes_to_idle(m, v, filler, RESYNC_MAX) for variants, m in self._wire for v in variants)
             data = chunk[:need]
             self.observe(data)
             self.resyncs += 1
@@ -375,42 +358,3 @@ def _crc_byte(frame: ParsedFrame, base: int, n: int, flipped: set[int]) -> int |
         if 0 <= at < n and at not in flipped:
             return at
     return None
-
-
-def _offending(frames: list[ParsedFrame], model: CParser, base: int,
-               hits: list[tuple[ParsedFrame, int]], inert: frozenset[int]) -> None:
-    for f in frames:
-        if f.result == OK and f.msgid not in inert:
-            hits.append((f, base))
-    p = model.awaiting_signature()
-    if p is not None and p.msgid not in inert:
-        hits.append((p, base))
-
-
-def _merged(models: Models) -> Models:
-    """Groups whose states are equal made one again."""
-    out: Models = []
-    for variants, m in models:
-        for k, (others, o) in enumerate(out):
-            if m.same_state(o):
-                out[k] = (others + variants, o)
-                break
-        else:
-            out.append((variants, m))
-    return out
-
-
-def _bytes_to_idle(model: CParser, variant: str, filler: int) -> int:
-    """How many filler bytes bring `model` to IDLE (it stays IDLE after: no start byte)."""
-    if model.idle:
-        return 0
-    lo, hi = 1, RESYNC_MAX
-    while lo < hi:
-        mid = (lo + hi) // 2
-        t = model.copy()
-        t.feed(bytes((filler,)) * mid, variant)
-        if t.idle:
-            hi = mid
-        else:
-            lo = mid + 1
-    return lo
