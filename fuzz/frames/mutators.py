@@ -43,7 +43,10 @@ Mutator = Callable[[bytes, int, MutationContext], bytes]
 
 def _garbage(arg: int, n: int) -> bytes:
     """n random bytes with no frame start in them, so the decoder must resync after them."""
-    return bytes(b ^ 0x10 if b in (MAGIC_V1, MAGIC_V2) else b for b in random.Random(arg).randbytes(n))
+    return random.Random(arg).randbytes(n).translate(_NO_START)
+
+
+_NO_START = bytes(b ^ 0x10 if b in (MAGIC_V1, MAGIC_V2) else b for b in range(256))   # for translate()
 
 
 def unmutated(frame: bytes, arg: int, ctx: MutationContext) -> bytes:
@@ -152,3 +155,5 @@ MUTATORS: dict[str, Mutator] = {f.__name__: f for f in (
     incompat_flags, wrong_key_signature, stale_timestamp, garbage_between, bit_flip,
     signed_flag_unsigned, random_bytes)}
 MUTATOR_NAMES: tuple[str, ...] = tuple(MUTATORS)
+# The mutators whose output is a function of (frame, arg) alone: no clock, no context state.
+PURE: frozenset[str] = frozenset(MUTATORS) - {"wrong_key_signature", "stale_timestamp"}

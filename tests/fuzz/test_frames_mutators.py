@@ -121,3 +121,32 @@ def test_program_records_parse_into_datagrams_of_one_to_eight_frames() -> None:
     joined = parse(bytes([0xFF, 0, 0, 0, 0]) * 20)
     assert [len(d) for d in joined] == [8, 8, 4]
     assert len(GCS_IDS) == 8 and (250, 190) not in GCS_IDS
+
+
+class _Passthrough:
+    """An admission rule that lets everything out: the builder's own frames, unchanged."""
+
+    last_filled: list[int] = []
+
+    def admit(self, frames: list[bytes]) -> tuple[list[bytes], list[int]]:
+        return frames, []
+
+
+def test_a_builder_reuses_only_what_mutating_again_would_give() -> None:
+    """The builder keeps pure mutators' frames per spec (specs repeat); each datagram must
+    hold exactly what mutating the template afresh gives, clock-bound mutators included."""
+    import random
+    from mavconform.fuzz.frames.mutators import MUTATOR_NAMES, PURE
+    from mavconform.fuzz.frames.program import Builder
+    clock = SimClock(100.0)
+    c = MutationContext(key=KEY, wrong_key=WRONG, wall_clock=clock.wall)
+    fresh = MutationContext(key=KEY, wrong_key=WRONG, wall_clock=clock.wall)
+    builder = Builder(TARGET, c, _Passthrough(), sign_frames=False)
+    body = random.Random(3).randbytes(CHUNK * RECORD * 40)
+    program = parse(body + body)          # every spec twice at least
+    for specs in program:
+        got, _ = builder.datagram(specs)
+        want = [MUTATORS[MUTATOR_NAMES[s.mutator]](builder.base(s.source, s.template), s.arg, fresh) for s in specs]
+        assert got == want, specs
+        clock.advance(0.37)
+    assert builder._made and all(MUTATOR_NAMES[s.mutator] in PURE for s in builder._made)
