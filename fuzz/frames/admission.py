@@ -89,6 +89,7 @@ ROUNDS = 16                 # re-parses of one datagram after flips, at most
 FILLERS = (0x00, 0x55, 0xAA, 0x11, 0x77, 0x33, 0xCC, 0x01)   # never 0xFD / 0xFE
 RESYNC_MAX = 300            # > the longest frame (280 bytes): enough to end any of them
 QUEUE_MAX = 4096            # admitted datagrams not yet seen on the wire, kept at most
+MEMO_MAX = 20_000           # admit() outcomes kept for datagrams that come again (see admit)
 
 
 def _target_table() -> MessageTable:
@@ -140,6 +141,7 @@ class Admission:
         self._plan: Models = models   # the state after every admitted datagram
         self._wire: Models = models   # the state after every datagram the target has read
         self._queue: deque[tuple[bytes, Models]] = deque(maxlen=QUEUE_MAX)
+        self._memo: dict[Any, tuple] = {}
         self.neutralised = 0   # frames whose bytes were changed by the rule
         self.filled = 0        # of which replaced by filler (the flips did not settle)
         self.last_filled: list[int] = []
@@ -168,7 +170,35 @@ class Admission:
 
     # --- fuzz datagrams ---------------------------------------------------------------------
     def admit(self, frames: list[bytes]) -> tuple[list[bytes], list[int]]:
-        """The frames to send as one datagram, and the indexes of those neutralised."""
+        """The frames to send as one datagram, and the indexes of those neutralised.
+
+        Without a key the decoder keeps no state, and a stream model in IDLE none but its
+        offset: from there the outcome depends on the frames alone, so it is kept (specs and
+        whole datagrams repeat: Hypothesis mutates what it drew before) and replayed, the
+        models moved to the stream offset of now."""
+        plan = self._plan
+        if self.key is not None or len(plan) != 1 or plan[0][1]._buf:
+            return self._admit(frames)
+        variants, model = plan[0]
+        key = (variants, *frames)
+        kept = self._memo.get(key)
+        if kept is None:
+            out, fixed = self._admit(frames)
+            if len(self._memo) >= MEMO_MAX:
+                self._memo.clear()
+            self._memo[key] = (model.offset, tuple(out), tuple(fixed), tuple(self.last_filled),
+                               self._queue[-1][0], self._plan)
+            return out, fixed
+        at, out, fixed, filled, sent, models = kept
+        delta = model.offset - at
+        self._plan = models = [(vs, m.shifted(delta)) for vs, m in models]
+        self._queue.append((sent, models))
+        self.last_filled = list(filled)
+        self.neutralised += len(fixed)
+        self.filled += len(filled)
+        return list(out), list(fixed)
+
+    def _admit(self, frames: list[bytes]) -> tuple[list[bytes], list[int]]:
         data = b"".join(frames)
         offending = self._decoder_offending(data, self.decoder)
         first = None

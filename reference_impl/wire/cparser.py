@@ -197,6 +197,14 @@ class CParser:
         new._streams = dict(self._streams) if self._streams else {}
         return new
 
+    def shifted(self, delta: int) -> "CParser":
+        """A copy, as if `delta` more bytes had been fed before everything (stream offsets
+        move by `delta`; the state does not)."""
+        new = self.copy()
+        new.offset += delta
+        new._start += delta
+        return new
+
     def same_state(self, other: "CParser") -> bool:
         """Would `other` parse the next bytes as this one does, but for its variant? (IDLE, the
         last frame's start and v1 flag are left over: the next start byte sets both.)"""

@@ -121,3 +121,42 @@ def test_the_rule_flags_the_same_frames_as_with_the_full_decode(keyed: bool) -> 
         flagged += len(want)
         clock.advance(0.001)
     assert flagged > 20
+
+
+class _Unkept(Admission):
+    """The rule computing every datagram afresh (no outcome kept)."""
+
+    def admit(self, frames: list[bytes]) -> tuple[list[bytes], list[int]]:
+        return self._admit(frames)
+
+
+def _state(adm: Admission) -> list[tuple]:
+    return [(vs, m.offset, m._buf, m._start if m._buf else None, m._v1 if m._buf else None) for vs, m in adm._plan]
+
+
+def test_a_kept_outcome_equals_a_fresh_one() -> None:
+    """Keyless, from an IDLE model, admit() replays what it worked out for the same frames
+    before: the same frames out, the same flips and fillers, the same model state moved to
+    the stream offset of now; the oracle's datagrams and resync fillers in between."""
+    clock = SimClock(1.7e9)
+    ctx = MutationContext(KEY, WRONG, clock.wall)
+    rng = random.Random(4)
+    mutators = [MUTATORS[name] for name in MUTATOR_NAMES]
+    pool = [[mutators[s.mutator](BASES[(s.source, s.template)], s.arg, ctx) for s in specs]
+            for specs in parse(random.Random(9).randbytes(600 * RECORD))]
+    kept, fresh = Admission(None, False, clock.wall), _Unkept(None, False, clock.wall)
+    hits = 0
+    for step in range(3000):
+        frames = rng.choice(pool)
+        hits += kept._memo.get((kept._plan[0][0], *frames)) is not None if len(kept._plan) == 1 else 0
+        got, want = kept.admit(list(frames)), fresh.admit(list(frames))
+        assert got == want and kept.last_filled == fresh.last_filled, step
+        assert (kept.neutralised, kept.filled) == (fresh.neutralised, fresh.filled)
+        assert _state(kept) == _state(fresh), step
+        for adm in (kept, fresh):
+            adm.observe(b"".join(got[0]))
+        if step % 7 == 0:               # the oracle speaks: resync, then its frame
+            assert kept.resync() == fresh.resync()
+            for adm in (kept, fresh):
+                adm.observe(BASES[(0, 0)])
+    assert hits > 500 and kept.neutralised > 100
