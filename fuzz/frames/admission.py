@@ -172,25 +172,25 @@ class Admission:
     def admit(self, frames: list[bytes]) -> tuple[list[bytes], list[int]]:
         """The frames to send as one datagram, and the indexes of those neutralised.
 
-        Without a key the decoder keeps no state, and a stream model in IDLE none but its
-        offset: from there the outcome depends on the frames alone, so it is kept (specs and
-        whole datagrams repeat: Hypothesis mutates what it drew before) and replayed, the
-        models moved to the stream offset of now."""
+        Without a key the decoder keeps no state, so the outcome depends on the frames and
+        the stream models' state alone, offsets aside: it is kept (specs and whole datagrams
+        repeat: Hypothesis mutates what it drew before) and replayed, the models moved to
+        the stream offset of now."""
         plan = self._plan
-        if self.key is not None or len(plan) != 1 or plan[0][1]._buf:
+        if self.key is not None or not plan:
             return self._admit(frames)
-        variants, model = plan[0]
-        key = (variants, *frames)
+        offset = plan[0][1].offset       # every group has read the same bytes
+        key = (tuple((vs, m.resume_key()) for vs, m in plan), *frames)
         kept = self._memo.get(key)
         if kept is None:
             out, fixed = self._admit(frames)
             if len(self._memo) >= MEMO_MAX:
                 self._memo.clear()
-            self._memo[key] = (model.offset, tuple(out), tuple(fixed), tuple(self.last_filled),
+            self._memo[key] = (offset, tuple(out), tuple(fixed), tuple(self.last_filled),
                                self._queue[-1][0], self._plan)
             return out, fixed
         at, out, fixed, filled, sent, models = kept
-        delta = model.offset - at
+        delta = offset - at
         self._plan = models = [(vs, m.shifted(delta)) for vs, m in models]
         self._queue.append((sent, models))
         self.last_filled = list(filled)

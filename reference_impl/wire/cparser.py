@@ -205,6 +205,14 @@ class CParser:
         new._start += delta
         return new
 
+    def resume_key(self) -> tuple:
+        """What parsing the next bytes depends on, stream offsets aside, for parsers of one
+        table and configuration: equal keys parse the same bytes alike (at offsets apart by
+        the difference of their `offset`s: see `shifted`)."""
+        buf = self._buf
+        return (buf, self._v1 if buf else None, self._timestamp,
+                frozenset(self._streams.items()) if self._streams else None)
+
     def same_state(self, other: "CParser") -> bool:
         """Would `other` parse the next bytes as this one does, but for its variant? (IDLE, the
         last frame's start and v1 flag are left over: the next start byte sets both.)"""
