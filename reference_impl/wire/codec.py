@@ -216,7 +216,10 @@ class FrameDecoder:
         """(offset, length, msgid, verdict) of each frame `feed` would return as a `Frame`, with
         the same effect on the signing state, but no message built: what a caller that only
         asks which frames a receiver accepts needs (the frame fuzzer's admission rule decodes
-        every datagram it sends). Frames split exactly as in `feed`; counters are not kept."""
+        every datagram it sends). Frames split exactly as in `feed`, and a frame whose msgid
+        and checksum pass is one pymavlink decodes (it pads or cuts the payload to the
+        message's size; the generated constructors take any value: see
+        tests/fuzz/test_frames_admission_decoder.py). `frames` and `errors` are not counted."""
         out: list[tuple[int, int, int, SignatureVerdict]] = []
         keyless = self._keyring is None and self._mav.signing.secret_key is None
         n = len(data)
