@@ -22,7 +22,7 @@ import inspect
 import re
 import struct
 import time
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Iterator
 
 from .checksum import crc16
 from .frame import DecodeError, Frame, SignatureFault, SignatureVerdict
@@ -173,43 +173,13 @@ class FrameDecoder:
             if data[1] + V2_OVERHEAD + (SIGNATURE_LEN if data[2] & IFLAG_SIGNED else 0) == n:
                 return [self._decode_one(data, data[2])]
         out: list[Frame | DecodeError] = []
-        i = 0
-        garbage_start = -1
-        while i < n:
-            magic = data[i]
-            if magic != MAGIC_V2 and magic != MAGIC_V1:
-                if garbage_start < 0:
-                    garbage_start = i
-                i = _next_start(data, i + 1)
-                continue
-            if garbage_start >= 0:
-                out.append(self._error("bytes outside any frame", data[garbage_start:i]))
-                garbage_start = -1
-            if i + 1 >= n:
-                out.append(self._error("truncated frame header", data[i:]))
-                break
-            plen = data[i + 1]
-            if magic == MAGIC_V2:
-                if i + 2 >= n:
-                    out.append(self._error("truncated frame header", data[i:]))
-                    break
-                iflags = data[i + 2]
-                total = plen + V2_OVERHEAD + (SIGNATURE_LEN if iflags & IFLAG_SIGNED else 0)
+        for start, end, iflags in _pieces(data):
+            if iflags.__class__ is str:
+                out.append(self._error(iflags, data[start:end]))
+            elif iflags & ~IFLAG_SIGNED:
+                out.append(self._error(f"unknown incompat_flags 0x{iflags:02x}", data[start:end]))
             else:
-                iflags = 0
-                total = plen + V1_OVERHEAD
-            if i + total > n:
-                out.append(self._error(
-                    f"truncated frame: header says {total} bytes, {n - i} remain", data[i:]))
-                break
-            chunk = data[i:i + total]
-            if iflags & ~IFLAG_SIGNED:
-                out.append(self._error(f"unknown incompat_flags 0x{iflags:02x}", chunk))
-            else:
-                out.append(self._decode_one(chunk, iflags))
-            i += total
-        if garbage_start >= 0:
-            out.append(self._error("bytes outside any frame", data[garbage_start:]))
+                out.append(self._decode_one(data[start:end], iflags))
         return out
 
     def accepted(self, data: bytes) -> list[tuple[int, int, int, SignatureVerdict]]:
@@ -222,38 +192,22 @@ class FrameDecoder:
         tests/fuzz/test_frames_admission_decoder.py). `frames` and `errors` are not counted."""
         out: list[tuple[int, int, int, SignatureVerdict]] = []
         keyless = self._keyring is None and self._mav.signing.secret_key is None
-        n = len(data)
-        i = 0
-        while i < n:
-            magic = data[i]
-            if magic != MAGIC_V2 and magic != MAGIC_V1:
-                i = _next_start(data, i + 1)
+        for i, end, iflags in _pieces(data):
+            if iflags.__class__ is str or iflags & ~IFLAG_SIGNED:
                 continue
-            if i + 2 >= n and (magic == MAGIC_V2 or i + 1 >= n):
-                break                                   # truncated frame header
-            plen = data[i + 1]
-            if magic == MAGIC_V2:
-                iflags = data[i + 2]
-                total = plen + V2_OVERHEAD + (SIGNATURE_LEN if iflags & IFLAG_SIGNED else 0)
-            else:
-                iflags = 0
-                total = plen + V1_OVERHEAD
-            if i + total > n:
-                break                                   # truncated frame
-            if keyless and not iflags & ~IFLAG_SIGNED:       # no signing state: verdict by the flag
-                msgid = self._check(data[i:i + total], iflags)
-                if msgid.__class__ is int:
-                    out.append((i, total, msgid, UNCHECKED if iflags else UNSIGNED))
-            elif not iflags & ~IFLAG_SIGNED:
-                chunk = data[i:i + total]
-                signed = bool(iflags & IFLAG_SIGNED)
-                mav, stream_key, saved_ts, stale, no_key = self._signing_context(chunk, signed)
+            chunk = data[i:end]
+            if keyless:                                 # no signing state: verdict by the flag
                 msgid = self._check(chunk, iflags)
                 if msgid.__class__ is int:
-                    sig_ok = stream_key is not None and bool(mav.check_signature(chunk, chunk[5], chunk[6]))
-                    verdict, _ = self._verdict(mav, chunk, signed, no_key, stream_key, saved_ts, stale, sig_ok)
-                    out.append((i, total, msgid, verdict))
-            i += total
+                    out.append((i, end - i, msgid, UNCHECKED if iflags else UNSIGNED))
+                continue
+            signed = bool(iflags & IFLAG_SIGNED)
+            mav, stream_key, saved_ts, stale, no_key = self._signing_context(chunk, signed)
+            msgid = self._check(chunk, iflags)
+            if msgid.__class__ is int:
+                sig_ok = stream_key is not None and bool(mav.check_signature(chunk, chunk[5], chunk[6]))
+                verdict, _ = self._verdict(mav, chunk, signed, no_key, stream_key, saved_ts, stale, sig_ok)
+                out.append((i, end - i, msgid, verdict))
         return out
 
     def _decode_one(self, chunk: bytes, iflags: int) -> Frame | DecodeError:
@@ -355,6 +309,36 @@ class FrameDecoder:
 
 
 UNSIGNED, UNCHECKED = SignatureVerdict.UNSIGNED, SignatureVerdict.UNCHECKED
+
+
+def _pieces(data: bytes) -> Iterator[tuple[int, int, int | str]]:
+    """A datagram cut as a MAVLink receiver frames it: (start, end, incompat flags) for each
+    frame by its header's length, or (start, end, why) for bytes no frame holds (a run between
+    frames, a truncated header or frame at the end). What `feed` and `accepted` both read."""
+    n = len(data)
+    i = 0
+    while i < n:
+        magic = data[i]
+        if magic != MAGIC_V2 and magic != MAGIC_V1:
+            j = _next_start(data, i + 1)
+            yield i, j, "bytes outside any frame"
+            i = j
+            continue
+        if i + 1 >= n or (magic == MAGIC_V2 and i + 2 >= n):
+            yield i, n, "truncated frame header"
+            return
+        plen = data[i + 1]
+        if magic == MAGIC_V2:
+            iflags = data[i + 2]
+            total = plen + V2_OVERHEAD + (SIGNATURE_LEN if iflags & IFLAG_SIGNED else 0)
+        else:
+            iflags = 0
+            total = plen + V1_OVERHEAD
+        if i + total > n:
+            yield i, n, f"truncated frame: header says {total} bytes, {n - i} remain"
+            return
+        yield i, i + total, iflags
+        i += total
 
 
 def _next_start(data: bytes, i: int) -> int:
