@@ -68,7 +68,7 @@ from bisect import bisect_right
 from collections import deque
 from typing import Any, Callable, Iterable
 
-from mavconform.reference_impl.wire.codec import MAGIC_V2, FrameDecoder
+from mavconform.reference_impl.wire.codec import FrameDecoder
 from mavconform.reference_impl.wire.cparser import OK, PARSE_CHAR, VARIANTS, CParser, MessageTable, ParsedFrame
 from mavconform.reference_impl.wire.frame import Frame, SignatureVerdict
 from mavconform.reference_impl.wire.signing import SigningKey
@@ -83,7 +83,6 @@ INERT: frozenset[str] = frozenset({
 })
 
 INVALID, VALID = SignatureVerdict.INVALID, SignatureVerdict.VALID
-V2_HEADER, V1_HEADER = 10, 6   # bytes before the payload
 
 ROUNDS = 16                 # re-parses of one datagram after flips, at most
 FILLERS = (0x00, 0x55, 0xAA, 0x11, 0x77, 0x33, 0xCC, 0x01)   # never 0xFD / 0xFE
@@ -294,7 +293,7 @@ class Admission:
         for pos, _, msgid, verdict in decoder.accepted(data):
             if msgid in inert or verdict is INVALID or (require and verdict is not VALID):
                 continue
-            at = pos + (V2_HEADER if data[pos] == MAGIC_V2 else V1_HEADER) + data[pos + 1]
+            at = wire.crc_offset(data, pos)
             if already is not None and at in already:
                 at += 1
                 if at in already:

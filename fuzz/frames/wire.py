@@ -27,8 +27,8 @@ _DIALECT = default_dialect()
 _MSG_BY_ID: dict[int, Any] = _DIALECT.mavlink_map
 
 
-def header_len(frame: bytes) -> int:
-    return 10 if frame[0] == MAGIC_V2 else 6
+def header_len(frame: bytes, start: int = 0) -> int:
+    return 10 if frame[start] == MAGIC_V2 else 6
 
 
 def msgid(frame: bytes) -> int:
@@ -41,9 +41,9 @@ def is_signed(frame: bytes) -> bool:
     return frame[0] == MAGIC_V2 and bool(frame[2] & IFLAG_SIGNED)
 
 
-def crc_offset(frame: bytes) -> int:
-    """Index of the first checksum byte."""
-    return header_len(frame) + frame[1]
+def crc_offset(frame: bytes, start: int = 0) -> int:
+    """Index of the first checksum byte of the frame at `start` (in a datagram, say)."""
+    return start + header_len(frame, start) + frame[start + 1]
 
 
 def crc_extra(mid: int) -> int:
