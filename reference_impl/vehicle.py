@@ -38,7 +38,7 @@ from .mission.actions import Send
 from .mission.behaviour import ServerBehaviour
 from .mission.constants import Cmd, CommandResult
 from .mission.constants import Cmd as _Cmd
-from .mission.items import PLAN_TYPES, MissionItem, MissionType
+from .mission.items import MISSION_PLAN, PLAN_TYPES, MissionItem, MissionType
 from .mission.server import MissionServer
 from .net.node import Address
 from .vehicle_class import VehicleClass, vehicle_class
@@ -49,7 +49,6 @@ from .wire.signing import SigningKey
 HEARTBEAT_PERIOD = 1.0
 POSITION_PERIOD = 1.0
 MAX_CONTROL_EVENTS = 1000   # kept for whoever reads them (the mission computer, later)
-_MISSION = MissionType.MISSION   # read per frame: on Python 3.11 a slow lookup off the enum class
 
 
 @dataclass(frozen=True)
@@ -189,9 +188,9 @@ class VehicleNode:
             server = self.server
             if server.handles(name):
                 # the stored mission is a tuple replaced on commit: identity tells a change
-                seq_before, mission_before = server.progress.seq, server.store.items(_MISSION)
+                seq_before, mission_before = server.progress.seq, server.store.items(MISSION_PLAN)
                 self._send(server.handle(frame, now))
-                if server.store.items(_MISSION) is not mission_before:
+                if server.store.items(MISSION_PLAN) is not mission_before:
                     self._plan_changed(now)
                 elif server.progress.seq != seq_before:
                     self.flight.retarget(now)

@@ -33,6 +33,9 @@ class MissionType(IntEnum):
 
 
 PLAN_TYPES: tuple[MissionType, ...] = (MissionType.MISSION, MissionType.FENCE, MissionType.RALLY)
+# MissionType.MISSION bound once, for code that reads it for every frame or item: on Python 3.11
+# a member read off its enum class is a slow metaclass lookup (about ten times a global's).
+MISSION_PLAN = MissionType.MISSION
 # Wire value -> plan type; a dict lookup is much cheaper than calling the enum.
 PLAN_TYPE_BY_VALUE: dict[int, MissionType] = {int(t): t for t in PLAN_TYPES}
 

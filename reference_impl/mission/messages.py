@@ -10,13 +10,12 @@ from typing import Any
 
 from ..wire.dialect import mavlink as _d
 from .constants import Cmd
-from .items import PLAN_TYPE_BY_VALUE, MissionItem, MissionType
+from .items import MISSION_PLAN, PLAN_TYPE_BY_VALUE, MissionItem, MissionType
 
 ITEM_INT = "MISSION_ITEM_INT"
 ITEM_FLOAT = "MISSION_ITEM"
 REQUEST_INT = "MISSION_REQUEST_INT"
 REQUEST_FLOAT = "MISSION_REQUEST"
-_MISSION = MissionType.MISSION   # read per item: on Python 3.11 `MissionType.MISSION` is a slow lookup
 
 
 def item_message(item: MissionItem, target: tuple[int, int], *, as_int: bool = True) -> Any:
@@ -45,7 +44,7 @@ def item_from_message(msg: Any) -> MissionItem | None:
     # positional, in MissionItem's field order (cheaper than keywords on this hot path)
     return MissionItem(msg.seq, msg.frame, msg.command, msg.param1, msg.param2, msg.param3,
                        msg.param4, x, y, msg.z, msg.current, msg.autocontinue,
-                       PLAN_TYPE_BY_VALUE.get(msg.mission_type, _MISSION))
+                       PLAN_TYPE_BY_VALUE.get(msg.mission_type, MISSION_PLAN))
 
 
 def float_xy_defect(msg: Any) -> int | None:

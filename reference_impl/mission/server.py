@@ -33,12 +33,11 @@ from . import messages as m
 from .actions import Peer, Send
 from .behaviour import ServerBehaviour
 from .constants import Cmd, CommandResult, MissionResult, Severity
-from .items import PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
+from .items import MISSION_PLAN, PLAN_TYPE_BY_VALUE, PLAN_TYPES, MissionItem, MissionType
 from .progress import MissionProgress
 from .store import STORAGE_FORMS, MissionStore
 from .transitions import ALL_SERVER_TRANSITIONS, SlotEvent, SlotState
-from .server_uploads import (_IDLE, _MISSION, _RECEIVING, _REQUEST_VALID, _SENDING,
-                             ServerUploads, _LastAccepted)
+from .server_uploads import _IDLE, _RECEIVING, _REQUEST_VALID, _SENDING, ServerUploads, _LastAccepted
 from .upload_counters import UploadCounters
 
 
@@ -170,7 +169,7 @@ class MissionServer(ServerUploads):
     def command_set_current(self, seq_param: float, source: Peer, now: float) -> list[Send]:
         """MAV_CMD_DO_SET_MISSION_CURRENT: COMMAND_ACK, then MISSION_CURRENT or STATUSTEXT."""
         seq = self.progress.seq if seq_param == -1 else seq_param
-        count = self.store.count(_MISSION)
+        count = self.store.count(MISSION_PLAN)
         if not math.isfinite(seq) or seq != int(seq) or not 0 <= seq < count:
             return [Send(m.command_ack_message(Cmd.DO_SET_MISSION_CURRENT, CommandResult.FAILED, source), source),
                     *self._set_current_failed(seq_param, count)]
@@ -272,9 +271,9 @@ class MissionServer(ServerUploads):
         if any(self._busy_with_other(self._slots[t], src) for t in types):
             self.stats.denied += 1
             return [Send(m.ack_message(MissionResult.DENIED, reply_type, src), src)]
-        if _MISSION in types and self.progress.running and not b.clear_while_flying:
+        if MISSION_PLAN in types and self.progress.running and not b.clear_while_flying:
             return [Send(m.ack_message(MissionResult.ERROR, reply_type, src), src)]   # A12
-        refused = self._v1_refusal(types[0] if len(types) == 1 else _MISSION, src)
+        refused = self._v1_refusal(types[0] if len(types) == 1 else MISSION_PLAN, src)
         if refused is not None:
             return refused
         out: list[Send] = []
@@ -285,14 +284,14 @@ class MissionServer(ServerUploads):
             self._move(slot, SlotEvent.CLEAR)
             self.store.clear(t)
             self._last_accepted.pop(t, None)
-        if _MISSION in types:
+        if MISSION_PLAN in types:
             out += self.progress.plan_replaced(now)
         return [Send(m.ack_message(MissionResult.ACCEPTED, reply_type, src), src)] + out
 
     def _on_set_current(self, msg: Any, src: Peer, now: float) -> list[Send]:
         if self.behaviour.set_current_only_idle and not self.is_idle():
             return [Send(m.statustext_message(Severity.WARNING, "Set current refused: a transfer is in progress"))]
-        count = self.store.count(_MISSION)
+        count = self.store.count(MISSION_PLAN)
         if not 0 <= msg.seq < count:
             return self._set_current_failed(msg.seq, count) if self.behaviour.set_current_failure_text else []
         return self.progress.set_current(msg.seq, now)
@@ -302,11 +301,11 @@ class MissionServer(ServerUploads):
         """Stored item `seq` as a download serves it: item 0 of a mission is the vehicle's
         home when the plan holds it there (A1); `current` says whether it is the current
         mission item (seed 000 field table), whatever the uploading GCS put there."""
-        if seq == 0 and t is _MISSION and self.behaviour.home_at_seq0:
+        if seq == 0 and t is MISSION_PLAN and self.behaviour.home_at_seq0:
             item = self._keep(self.home)
         else:
             item = self.store.items(t)[seq]
-        current = int(t is _MISSION and seq == self.progress.seq
+        current = int(t is MISSION_PLAN and seq == self.progress.seq
                       and self.behaviour.download_current_flag)
         return item if item.current == current else replace(item, current=current)
 
@@ -360,7 +359,7 @@ class MissionServer(ServerUploads):
 
     def _plan_type(self, raw: int) -> MissionType | None:
         if self.behaviour.mission_type_ignored:
-            return _MISSION
+            return MISSION_PLAN
         t = PLAN_TYPE_BY_VALUE.get(raw)
         if t is None or t not in self.behaviour.supported_types:
             return None

@@ -15,7 +15,7 @@ from . import messages as m
 from .actions import Peer, Send
 from .behaviour import ServerBehaviour
 from .constants import MissionResult, Severity
-from .items import MissionItem, MissionType
+from .items import MISSION_PLAN, MissionItem, MissionType
 from .progress import MissionProgress
 from .store import MissionStore
 from .transitions import SlotEvent, SlotState
@@ -31,7 +31,6 @@ if TYPE_CHECKING:
 _IDLE, _RECEIVING, _SENDING = SlotState.IDLE, SlotState.RECEIVING, SlotState.SENDING
 _REQUEST_VALID, _ITEM_NEXT = SlotEvent.REQUEST_VALID, SlotEvent.ITEM_NEXT
 _TIMEOUT_RETRY, _ITEM_OUT_OF_SEQUENCE = SlotEvent.TIMEOUT_RETRY, SlotEvent.ITEM_OUT_OF_SEQUENCE
-_MISSION = MissionType.MISSION
 
 
 @dataclass
@@ -234,7 +233,7 @@ class ServerUploads:
         else:
             self._last_accepted.pop(t, None)
         out = [Send(m.ack_message(MissionResult.ACCEPTED, t, src, opaque_id), src)]
-        if t is _MISSION:
+        if t is MISSION_PLAN:
             out += self.progress.plan_replaced(now)
         return out
 

@@ -26,7 +26,7 @@ from .commands import LOCATION_COMMANDS
 from .constants import (
     FENCE_COMMANDS, MISSION_COMMANDS, POSITIONAL_COMMANDS, RALLY_COMMANDS, Cmd, MissionResult,
 )
-from .items import FRAME_MISSION, GLOBAL_FRAMES, MissionItem, MissionType
+from .items import FRAME_MISSION, GLOBAL_FRAMES, MISSION_PLAN, MissionItem, MissionType
 
 COMMANDS_BY_TYPE = {
     MissionType.MISSION: MISSION_COMMANDS,
@@ -35,7 +35,6 @@ COMMANDS_BY_TYPE = {
 }
 # Enum members the rules read for every item, bound once: on Python 3.11 each read of a
 # member off its class (`Cmd.DO_JUMP`) goes through the enum metaclass's slow attribute hook.
-_MISSION = MissionType.MISSION
 _NAV_WAYPOINT, _DO_JUMP = Cmd.NAV_WAYPOINT, Cmd.DO_JUMP
 _POLYGON_VERTICES = (Cmd.NAV_FENCE_POLYGON_VERTEX_INCLUSION, Cmd.NAV_FENCE_POLYGON_VERTEX_EXCLUSION)
 _CIRCLES = (Cmd.NAV_FENCE_CIRCLE_INCLUSION, Cmd.NAV_FENCE_CIRCLE_EXCLUSION)
@@ -79,11 +78,11 @@ def _param(n: int) -> Callable[[MissionItem], float]:
 
 
 def _positional(it: MissionItem) -> bool:
-    return it.command in POSITIONAL_COMMANDS or it.mission_type != _MISSION
+    return it.command in POSITIONAL_COMMANDS or it.mission_type != MISSION_PLAN
 
 
 def _in_mission(it: MissionItem) -> bool:
-    return it.mission_type is _MISSION
+    return it.mission_type is MISSION_PLAN
 
 
 @dataclass(frozen=True)
@@ -106,7 +105,7 @@ def command_rules(mission_commands: MissionCommands, all_plans: bool = False) ->
     items too (their commands must then be in the frame's list), as PX4's one parser does."""
     if mission_commands is None:
         return (ItemRule("fence and rally commands known", MissionResult.UNSUPPORTED,
-                         lambda it: it.mission_type is not _MISSION,
+                         lambda it: it.mission_type is not MISSION_PLAN,
                          lambda it: it.command in COMMANDS_BY_TYPE[it.mission_type]),)
     if isinstance(mission_commands, AbstractSet):
         mission_commands = (CommandList(None, frozenset(mission_commands)),)
@@ -122,11 +121,11 @@ def command_rules(mission_commands: MissionCommands, all_plans: bool = False) ->
             return chosen
 
     def known(it: MissionItem) -> bool:
-        if it.mission_type is not _MISSION or all_plans:
+        if it.mission_type is not MISSION_PLAN or all_plans:
             # a table shared by every plan type still holds each type to its own commands
             if it.command not in COMMANDS_BY_TYPE[it.mission_type]:
                 return False
-            if it.mission_type is not _MISSION and not all_plans:
+            if it.mission_type is not MISSION_PLAN and not all_plans:
                 return True
         chosen = selected(it.frame)
         return chosen is not None and it.command in chosen.commands
