@@ -54,6 +54,11 @@ class ClauseLoop:
             self.dead = dead_after(clause, result)
             self.record(clause, result)
 
+    def never_answered(self, why: str) -> None:
+        """Discovery failed: every clause is `error`, the target unresponsive."""
+        for clause in self.clauses:
+            self.record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {why}"))
+
     def give_up(self, why: str) -> None:
         """The target died outside any clause: every clause not decided is `error`, not run."""
         self.dead = why

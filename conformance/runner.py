@@ -128,8 +128,7 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
             identity = session.discover()
             discovered = time.monotonic() - started
         except TargetUnresponsive as exc:
-            for clause in loop.clauses:
-                loop.record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
+            loop.never_answered(str(exc))
             return RunOutcome(loop.results, None, {"status": "skipped", "detail": "the target never answered"},
                               time.monotonic() - started, 0.0, unresponsive=str(exc),
                               receive_queue=session.receive_facts(), link=session.link_facts,

@@ -67,8 +67,7 @@ def run_msp_clauses(session: MspSession, clauses: Iterable[Clause], *, on_result
             try:
                 identity = discover(session)
             except TargetUnresponsive as exc:
-                for clause in loop.clauses:
-                    loop.record(clause, ClauseResult(clause.id, Outcome.ERROR, f"target unresponsive: {exc}"))
+                loop.never_answered(str(exc))
                 return RunOutcome(loop.results, None, {"status": "skipped",
                                                        "detail": "the flight controller never answered"},
                                   time.monotonic() - started, 0.0, unresponsive=str(exc), link=session.link_facts,
