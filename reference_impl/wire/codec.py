@@ -171,7 +171,9 @@ class FrameDecoder:
         if n > 2 and data[0] == MAGIC_V2 and not data[2] & ~IFLAG_SIGNED:
             # The usual UDP datagram: exactly one well-formed MAVLink 2 frame.
             if data[1] + V2_OVERHEAD + (SIGNATURE_LEN if data[2] & IFLAG_SIGNED else 0) == n:
-                return [self._decode_one(data, data[2])]
+                if data[2] or self._mav is not self._plain or self._keyring is not None:
+                    return [self._decode_one(data, data[2])]
+                return [self._decode_plain(data)]
         out: list[Frame | DecodeError] = []
         for start, end, iflags in _pieces(data):
             if iflags.__class__ is str:
@@ -230,6 +232,20 @@ class FrameDecoder:
         self.frames += 1
         h = msg._header
         return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None, fault)
+
+    def _decode_plain(self, chunk: bytes) -> Frame | DecodeError:
+        """`_decode_one` for an unsigned MAVLink 2 frame whose length matches its header, with
+        no key anywhere: no signing state to read or keep, and pymavlink refuses an unknown
+        msgid (MAVLink_unknown) and a bad checksum itself. Most frames take this path."""
+        try:
+            msg = self._plain.decode(bytearray(chunk))
+        except Exception as exc:
+            return self._error(_reason(exc), chunk)
+        if isinstance(msg, self._unknown):
+            return self._error(f"unknown message id {chunk[7] | chunk[8] << 8 | chunk[9] << 16}", chunk)
+        self.frames += 1
+        h = msg._header
+        return Frame(msg, chunk, h.srcSystem, h.srcComponent)
 
     def _signing_context(self, chunk: bytes, signed: bool) -> tuple[Any, Any, int | None, bool, bool]:
         """(pymavlink decoder, stream key, its saved timestamp, stale, no key) for a frame,

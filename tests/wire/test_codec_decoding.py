@@ -250,3 +250,25 @@ def test_a_statustext_whose_chunk_id_is_over_255_still_goes_out_as_mavlink_1() -
     data = FrameEncoder(1, 1).encode(d.MAVLink_statustext_message(6, b"hello", 300, 0), version=1)
     (frame,) = [f for f in FrameDecoder().feed(data) if getattr(f, "msg", None) is not None]
     assert data[0] == 0xFE and frame.msg.get_type() == "STATUSTEXT" and frame.msg.text == "hello"
+
+
+# --- the keyless fast path is _decode_one ------------------------------------------------------
+
+def _outcome(dec: FrameDecoder, item: Frame | DecodeError) -> tuple:
+    if isinstance(item, DecodeError):
+        return ("error", item.reason, item.raw, dec.frames, dec.errors)
+    return ("frame", item.msg.get_type(), item.msg.to_dict(), item.raw, item.src_system, item.src_component,
+            item.signature, item.link_id, item.fault, dec.frames, dec.errors)
+
+
+@given(st.sampled_from([f for f in _VALID_FRAMES if f[0] == 0xFD and f[2] == 0]), st.data())
+def test_the_keyless_path_for_one_unsigned_frame_gives_what_decode_one_gives(frame: bytes, data: st.DataObject) -> None:
+    """`feed` decodes a datagram that is one unsigned MAVLink 2 frame, with no key anywhere,
+    without the signing and msgid steps: for any bytes after the header's first three (a bad
+    msgid, checksum, payload...), the outcome and the counters are `_decode_one`'s."""
+    index = data.draw(st.integers(3, len(frame) - 1))
+    value = data.draw(st.integers(0, 255))
+    mutated = frame[:index] + bytes([value]) + frame[index + 1:]
+    fast, slow = FrameDecoder(), FrameDecoder()
+    (got,) = fast.feed(mutated)
+    assert _outcome(fast, got) == _outcome(slow, slow._decode_one(mutated, 0))
