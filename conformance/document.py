@@ -116,6 +116,9 @@ def _volatile(r: ClauseResult, clause: dict[str, Any]) -> dict[str, Any]:
     ambient events (a stream's messages no check used: how many fell inside the clause is
     the stream's phase), each with the index it had in the whole exchange."""
     entry: dict[str, Any] = {"duration_s": r.duration_s}
+    for key in ("host_lag_s", "first_attempt"):   # conformance/host_lag.py
+        if getattr(r, key, None) is not None:
+            entry[key] = getattr(r, key)
     detail, values = str(r.detail), {}
     for text in (r.measured if isinstance(r, DecidedResult) else []):
         if text.values and str(text) in detail:   # an expectation may have reworded around it

@@ -34,6 +34,7 @@ from .harness import procedures
 from .harness.exchange import Exchange
 from .harness.float_forms import JUDGES_INT_FORMS
 from .harness.measured import Measured
+from .host_lag import judged_on_time
 from .outcome import (ClauseFailed, ClauseResult, NotApplicable, Outcome, PreconditionFailed,
                       Skipped, TargetUnresponsive)
 from .session import Session
@@ -69,6 +70,10 @@ class DecidedResult(ClauseResult):
     made from: the run document keeps their numbers apart from the detail's stable text
     (conformance/document.py), even once an expectation has reworded the detail."""
     measured: list[Measured] = field(default_factory=list)
+    # host_lag.py: how far behind its clock the tester ran while this was judged, when that
+    # was more than the tolerance; and the attempt run again because it did not pass then
+    host_lag_s: float | None = None
+    first_attempt: dict[str, Any] | None = None
 
 
 def _measured(*raised: BaseException | str | None) -> list[Measured]:
@@ -138,7 +143,7 @@ def run_clauses(session: Session, clauses: Iterable[Clause], *, on_result: OnRes
             snapshot = _snapshot(session)
         loop.phase, changed = "preparing the target", True
         identity["prepared"] = readiness.prepare(session.t).line()
-        loop.run(lambda clause: run_one(session, clause), dead_after)
+        loop.run(lambda clause: judged_on_time(session, clause, run_one), dead_after)
     results, phase, dead, interrupted, how = loop.results, loop.phase, loop.dead, loop.interrupted, loop.interrupted_by
     if interrupted and identity is not None:
         _after_interrupt(session)

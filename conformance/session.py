@@ -98,6 +98,7 @@ class Session:
         self.virtual = virtual
         self.allow_flight = uri.in_process if allow_flight is None else allow_flight
         self.cache: dict[str, Any] = {}        # observations several clauses share
+        self._observed_lag: dict[str, float] = {}   # shared(): the driver's lag while each was made
         self.current_clause = ""
         # how every flight ended (harness.landing): the clause that flew, the style, the plan,
         # disarmed or not; the run report shows them, and one left armed fails the run
@@ -268,8 +269,11 @@ class Session:
     def shared(self, key: str, observe: Callable[[], Any]) -> Any:
         """An observation several clauses decide from (e.g. one silent upload serves the
         retry count, the retry interval and the give-up clauses): made once per run, and
-        its exchange copied into every clause that uses it, so each keeps its evidence."""
+        its exchange copied into every clause that uses it, so each keeps its evidence.
+        The driver's lag while it was made goes with it: a clause that decides from it was
+        judged under that lag (conformance/host_lag.py)."""
         exchange = self.t.exchange
+        driver = self.driver
         if key in self.cache:
             value, events, owner, decided = self.cache[key]
             if exchange is not None:
@@ -278,14 +282,27 @@ class Session:
                 exchange.events.extend(events)
                 if decided is not None:   # what the observation judged, until the clause says otherwise
                     exchange.decide(decided)
+            driver.lag = max(driver.lag, self._observed_lag.get(key, 0.0))
             return value
         first = len(exchange.events) if exchange is not None else 0
-        value = observe()
+        outer, driver.lag = driver.lag, 0.0
+        try:
+            value = observe()
+        finally:
+            lag = driver.lag
+            driver.lag = max(outer, lag)
         events = list(exchange.events[first:]) if exchange is not None else []
         index = exchange.decided_by if exchange is not None else None
         decided = exchange.events[index] if index is not None and index >= first else None
         self.cache[key] = (value, events, self.current_clause, decided)
+        self._observed_lag[key] = lag
         return value
+
+    def forget_lagged(self, tolerance: float) -> None:
+        """Drop the shared observations made while the driver ran more than `tolerance`
+        behind its clock, so a clause run again observes afresh."""
+        for key in [k for k, lag in self._observed_lag.items() if lag > tolerance]:
+            del self.cache[key], self._observed_lag[key]
 
     def receive_facts(self) -> dict[str, int | None]:
         """For the run's report: the datagrams all the testers' sockets dropped (None:

@@ -56,10 +56,15 @@ Shape (keys the writers rely on; objects may carry more keys, which are kept):
                                                                  s from the clause's start
                               [detail: {name: text}],            the detail's <name>s
                               [notes: {"INDEX": {name: text}}],  a note event's <name>s
-                              [ambient: [{at, t, dir, peer, msg, fields}]]}}}
+                              [ambient: [{at, t, dir, peer, msg, fields}]],
                                  streamed messages no check used (MISSION_CURRENT at 1 Hz:
                                  how many fall in a clause is the stream's phase), each at
                                  its index in the whole exchange
+                              [host_lag_s],                      how far behind its clock the
+                                 tester ran while this was judged, when over the tolerance
+                              [first_attempt: {outcome, host_lag_s}]}}}
+                                 the attempt run again because it did not pass while the
+                                 host lagged (conformance/host_lag.py)
 
 The summary counts must agree with the clauses, so no report shows two different totals,
 and a run marked interrupted cannot have the verdict "pass" (what it did not reach is not

@@ -260,6 +260,11 @@ import time  # noqa: E402  (appended section: the imports above are shared)
 from ..harness.sentinel import answers_before_sentinel, brief  # noqa: E402
 from ..outcome import TargetUnresponsive  # noqa: E402
 
+# the frame fuzzer's faults. Imported with the clauses, not inside one: the import takes
+# ~0.2 s, and while a check computes, an in-process vehicle's timers wait (4 times as long
+# on its 4x clock)
+from mavconform.fuzz.frames.mutators import MutationContext, bad_crc, truncate  # noqa: E402
+
 BAD_CRC_FLIP = 0x5A5A      # XORed into the checksum (fuzz.frames.mutators.bad_crc)
 # After a frame cut short: bytes with no frame marker in them. A decoder that reads each
 # datagram alone drops them; a stream parser (mavlink_parse_char keeps its state across
@@ -271,8 +276,6 @@ FILLER = bytes([0x55]) * 280
 def _damaged_frames(t: Tester) -> list[tuple[str, bytes]]:
     """MISSION_CLEAR_ALL and MISSION_COUNT 0 (each would empty the plan if acted on), each
     once with a bad checksum and once cut off before its checksum; properly addressed."""
-    from mavconform.fuzz.frames.mutators import MutationContext, bad_crc, truncate   # the frame fuzzer's faults
-
     ctx = MutationContext(key=b"", wrong_key=b"", wall_clock=time.time)   # neither fault signs
     out = []
     for name, message in (("MISSION_CLEAR_ALL", m.clear_all_message(MISSION, t.target)),

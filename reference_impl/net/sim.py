@@ -116,6 +116,11 @@ class SimNetwork:
 
     # -- running ------------------------------------------------------------------------
 
+    lag = 0.0   # as UdpDriver.lag: virtual time never falls behind its own schedule
+
+    def take_lag(self) -> float:
+        return 0.0
+
     def in_flight(self) -> int:
         """Datagrams scheduled for delivery and not yet delivered."""
         return len(self._heap)

@@ -94,6 +94,18 @@ class UdpDriver:
         self._tiebreak = count()
         self._hooks: list[CaptureHook] = []
         self._closed = False
+        # the most this driver has run behind its own schedule since `take_lag()`, in clock
+        # seconds: how late it served a node deadline or a fault timer that was still ahead
+        # when it last looked, and how far it overslept the time it meant to wake. A host too
+        # busy to keep the clock (a 4x one asks four times the punctuality) shows here, and a
+        # timing verdict judged meanwhile is the host's.
+        self.lag = 0.0
+        self._looked = self.clock.now()   # when the driver last read what was due
+
+    def take_lag(self) -> float:
+        """`lag` since the last call, and start counting afresh."""
+        lag, self.lag = self.lag, 0.0
+        return lag
 
     # -- wiring -------------------------------------------------------------------------
 
@@ -185,8 +197,11 @@ class UdpDriver:
         for _ in range(max_steps):
             now = clock.now()
             busy = False
+            looked, self._looked = self._looked, now
             while timers and timers[0][0] <= now:
-                _, _, kind, ep, data, peer = heappop(timers)
+                due, _, kind, ep, data, peer = heappop(timers)
+                if due > looked and now - due > self.lag:
+                    self.lag = now - due
                 if kind == _SEND:
                     self._sendto(ep, data, peer)
                 else:
@@ -195,6 +210,8 @@ class UdpDriver:
             for ep in nodes:
                 d = ep.node.next_deadline()
                 if d is not None and d <= now:
+                    if d > looked and now - d > self.lag:
+                        self.lag = now - d
                     ep.node.poll(now)
                     busy = True
             for sp in streams:
@@ -220,6 +237,9 @@ class UdpDriver:
             if streams:
                 self._sync_streams(now)
             events = self._selector.select(max(0.0, wake - now) / speed)
+            overslept = clock.now() - wake
+            if overslept > self.lag and wake > now:
+                self.lag = overslept
             if events:
                 now = clock.now()
                 for key, mask in events:
