@@ -298,6 +298,10 @@ class Session:
         self._observed_lag[key] = lag
         return value
 
+    def take_lag(self) -> float:
+        """The most the driver ran behind its clock since the last call (host_lag.py)."""
+        return self.driver.take_lag()
+
     def forget_lagged(self, tolerance: float) -> None:
         """Drop the shared observations made while the driver ran more than `tolerance`
         behind its clock, so a clause run again observes afresh."""

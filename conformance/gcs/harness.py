@@ -81,6 +81,11 @@ class GcsHarness:
         self.operations: list[Operation] = []
         self._sim_time = 0.0     # virtual stages continue one clock, so exchange times grow
         self._observed: dict[str, Operation] = {}
+        # conformance/host_lag.py: the most a stage's driver ran behind the clock since
+        # take_lag(), and that of each shared operation's stage
+        self.lag = 0.0
+        self._observed_lag: dict[str, float] = {}
+        self._last_lag = 0.0
 
     # --- what a check calls -----------------------------------------------------------------
     def run(self, job: Job, *, plans: dict[MissionType, list[MissionItem]] | None = None,
@@ -102,6 +107,8 @@ class GcsHarness:
             if not stage.real_time:
                 self._sim_time = stage.clock.now() + 1.0
         finally:
+            self._last_lag = stage.lag
+            self.lag = max(self.lag, stage.lag)
             stage.close()
         op = Operation(job, vehicle, result, started, vehicle.gcs)
         self.operations.append(op)
@@ -122,9 +129,22 @@ class GcsHarness:
         op = self._observed.get(key)
         if op is None:
             op = self._observed[key] = self.run(job, **script)
+            self._observed_lag[key] = self._last_lag
         else:
             self._record(op)
+            self.lag = max(self.lag, self._observed_lag.get(key, 0.0))   # judged on what it saw
         return op
+
+    def take_lag(self) -> float:
+        """The most a stage's driver ran behind the clock since the last call (host_lag.py)."""
+        lag, self.lag = self.lag, 0.0
+        return lag
+
+    def forget_lagged(self, tolerance: float) -> None:
+        """Drop the shared operations observed while the driver ran more than `tolerance`
+        behind, so a clause run again observes afresh."""
+        for key in [k for k, lag in self._observed_lag.items() if lag > tolerance]:
+            del self._observed[key], self._observed_lag[key]
 
     def link(self) -> dict[str, Any] | None:
         """The run document's `run.link` when the clock was faster than real (else None, as

@@ -4,7 +4,8 @@ Each clause gets its own exchange; each operation a fresh scripted vehicle, so a
 only fail for what the GCS did in it. A GCS that sends nothing at all for an operation is
 `error` (not a verdict on the clause); after three such operations in a row the remaining
 clauses are not run: the GCS (or its adapter) is not working, and waiting out every bound
-would only cost time. An interrupt stops the run at the current clause, like the vehicle's.
+would only cost time. An interrupt stops the run at the current clause, like the vehicle's;
+and a clause that did not pass while the host lagged is run again, as there (host_lag.py).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from ..clause import Clause
 from ..harness.exchange import Exchange
 from ..outcome import ClauseResult, Outcome
 from ..clause_loop import ClauseLoop
+from ..host_lag import judged_on_time
 from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check
 from .checks import GCS_CHECKS
 from .harness import GcsHarness
@@ -35,7 +37,7 @@ def run_gcs_clauses(h: GcsHarness, clauses: Iterable[Clause], *, on_result: OnRe
         return f"the GCS sent nothing in {DEAD_AFTER} operations in a row" if silent >= DEAD_AFTER else None
 
     with loop.interruptible():
-        loop.run(lambda clause: run_one(h, clause), dead_after)
+        loop.run(lambda clause: judged_on_time(h, clause, run_one), dead_after)
     dead, interrupted, phase = loop.dead, loop.interrupted, loop.phase
     first = next((op for op in h.operations if op.gcs is not None), None)
     identity = None if first is None else {"system": first.gcs[0], "component": first.gcs[1],

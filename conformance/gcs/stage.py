@@ -29,6 +29,7 @@ class Stage(Protocol):
     vehicle: ScriptedVehicle
     vehicle_address: Address
     real_time: bool
+    lag: float   # how far behind its clock the stage's driver ran (conformance/host_lag.py)
 
     @property
     def clock(self) -> Clock: ...
@@ -58,6 +59,11 @@ class UdpStage:
     def run_until(self, condition: Callable[[], bool], *, timeout: float) -> bool:
         return self.driver.run_until(condition, timeout=timeout)
 
+    @property
+    def lag(self) -> float:
+        """How far behind its clock the driver ran (UdpDriver.lag)."""
+        return self.driver.lag
+
     def add_gcs(self, node: DatagramNode) -> Address:
         return self.driver.add_node(node, bind=(HOST, 0))
 
@@ -75,6 +81,7 @@ def free_port() -> int:
 
 class SimStage:
     real_time = False
+    lag = 0.0   # virtual time never falls behind
 
     def __init__(self, vehicle: ScriptedVehicle, *, seed: int = 0, start: float = 0.0,
                  capture: CaptureHook | None = None) -> None:

@@ -31,7 +31,8 @@ FORGOTTEN: list[float] = []
 
 def _judge(outcomes: list[Outcome], lags: list[float], speed: float = 1.0) -> tuple[DecidedResult, int]:
     FORGOTTEN.clear()
-    session = SimpleNamespace(driver=ScriptedDriver(lags), clock_speed=speed, forget_lagged=FORGOTTEN.append)
+    session = SimpleNamespace(take_lag=ScriptedDriver(lags).take_lag, clock_speed=speed,
+                              forget_lagged=FORGOTTEN.append)
     ran = []
 
     def run_one(_session, clause):
