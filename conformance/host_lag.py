@@ -5,11 +5,11 @@ Over real sockets the driver sleeps to the next deadline. A host too busy to wak
 serves the in-process vehicle's timers late and reads replies late, and a timing clause can
 then fail for the host's sake: a false verdict, the one thing the suite must not give. The
 driver measures how far behind its own schedule it ran (`UdpDriver.lag`; the vehicle suite's
-Session and the GCS suite's harness pass it on). A clause that did
-not pass while the driver ran more than `LAG_TOLERANCE` behind is run once more. The second
-attempt decides, unless it too did not pass under lag: then the clause is an error that names
-the host, not a verdict on the target. The run document's volatile section keeps the first
-attempt and the lag. Virtual time never lags, so nothing changes there.
+Session and the GCS suite's harness pass it on). A clause that did not pass while the driver
+ran more than `LAG_TOLERANCE` behind is run once more. The second attempt decides, unless it
+too did not pass under lag: then the clause is an error that names the host, not a verdict on
+the target. The run document's volatile section keeps the first attempt and the lag. Virtual
+time never lags, so nothing changes there.
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ from .outcome import ClauseResult, Outcome
 # behind, and ~0.05 s with six CPU hogs beside it; the shortest timer a clause judges is the
 # 250 ms item timeout (MIS.UP.07), so 0.1 s behind is where a timing verdict stops being sure
 LAG_TOLERANCE = 0.1
-
 
 
 class Judging(Protocol):

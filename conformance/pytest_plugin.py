@@ -232,8 +232,8 @@ def decide(session, clause, expected: dict, strict: bool) -> Any:
     """Run one clause and turn its outcome into pytest's vocabulary."""
     from .clause import Level
     from .gating import apply_expectations
-    from .outcome import ClauseResult, Outcome
     from .host_lag import judged_on_time
+    from .outcome import ClauseResult, Outcome
     from .runner import _still_alive, run_one
     dead = _STATE.get("dead")
     if dead is not None:   # as the CLI does: a dead target is not waited on clause after clause

@@ -15,24 +15,11 @@ from mavconform.conformance.runner import run_one
 from mavconform.conformance.session import Session
 from mavconform.conformance.target_uri import parse_target
 from mavconform.reference_impl.mission.transitions import SlotState
-from mavconform.reference_impl.net.clock import ScaledClock
+
+from ..net.nodes import JumpingClock
 
 pytestmark = pytest.mark.udp
 STALL = 4.0   # clock seconds: longer than the 3 s MIS.UP.06 waits for a silent vehicle to ask again
-
-
-class JumpingClock(ScaledClock):
-    __slots__ = ("offset",)
-
-    def __init__(self, speed: float) -> None:
-        super().__init__(speed)
-        self.offset = 0.0
-
-    def now(self) -> float:
-        return super().now() + self.offset
-
-    def wall(self) -> float:
-        return super().wall() + self.offset
 
 
 def _stall_once_while_the_vehicle_waits_for_item_2(s: Session) -> dict[str, bool]:
@@ -47,7 +34,7 @@ def _stall_once_while_the_vehicle_waits_for_item_2(s: Session) -> dict[str, bool
         if not events and not stalled["done"] and s.current_clause == "MIS.UP.06" and any(
                 slot.state is SlotState.RECEIVING and slot.expected == 2 for slot in server._slot_list):
             stalled["done"] = True
-            s.driver.clock.offset += STALL
+            s.driver.clock.stall(STALL)
         return events
     selector.select = oversleeping
     return stalled

@@ -1,8 +1,11 @@
-"""Small DatagramNodes for driver tests: they record what they see and send on cue."""
+"""Small DatagramNodes for driver tests: they record what they see and send on cue; and a
+clock that jumps, for a host that stalls."""
 
 from __future__ import annotations
 
 from typing import Hashable
+
+from mavconform.reference_impl.net.clock import ScaledClock
 
 Address = Hashable
 
@@ -109,3 +112,23 @@ class PingNode(RecorderNode):
 
     def next_deadline(self) -> float | None:
         return self._deadline
+
+
+class JumpingClock(ScaledClock):
+    """A ScaledClock that `stall(seconds)` moves on at once: how a process that was not run
+    for that long finds the clock when it runs again (a busy host), without a sleep."""
+
+    __slots__ = ("offset",)
+
+    def __init__(self, speed: float = 1.0) -> None:
+        super().__init__(speed)
+        self.offset = 0.0
+
+    def now(self) -> float:
+        return super().now() + self.offset
+
+    def wall(self) -> float:
+        return super().wall() + self.offset
+
+    def stall(self, seconds: float) -> None:
+        self.offset += seconds

@@ -4,31 +4,13 @@ forward while a node runs, as a descheduled process finds the clock when it runs
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from mavconform.reference_impl.net import UdpDriver
 
-from .nodes import TimerNode
+from .nodes import JumpingClock, TimerNode
 
 pytestmark = pytest.mark.udp
-
-
-class JumpingClock:
-    """Real time plus whatever `stall` added: a jump is a stall the process did not see."""
-
-    def __init__(self) -> None:
-        self.offset = 0.0
-
-    def now(self) -> float:
-        return time.monotonic() + self.offset
-
-    def wall(self) -> float:
-        return time.time() + self.offset
-
-    def stall(self, seconds: float) -> None:
-        self.offset += seconds
 
 
 class StallingTimer(TimerNode):

@@ -17,24 +17,11 @@ from mavconform.conformance.gcs.runner import run_gcs_clauses, run_one
 from mavconform.conformance.host_lag import LAG_TOLERANCE
 from mavconform.conformance.outcome import Outcome
 from mavconform.reference_impl.net import UdpDriver
-from mavconform.reference_impl.net.clock import ScaledClock
+
+from ...net.nodes import JumpingClock
 
 pytestmark = pytest.mark.udp
 STALL = 4.0   # clock seconds per idle wait: the 1.5 s resend timer then looks over 3 s, past the bound
-
-
-class JumpingClock(ScaledClock):
-    __slots__ = ("offset",)
-
-    def __init__(self, speed: float) -> None:
-        super().__init__(speed)
-        self.offset = 0.0
-
-    def now(self) -> float:
-        return super().now() + self.offset
-
-    def wall(self) -> float:
-        return super().wall() + self.offset
 
 
 def _oversleeping_first_operation(monkeypatch) -> dict[str, int]:
@@ -51,7 +38,7 @@ def _oversleeping_first_operation(monkeypatch) -> dict[str, int]:
                 events = select(timeout)
                 if first and not events:
                     state["stalls"] += 1
-                    self.clock.offset += STALL
+                    self.clock.stall(STALL)
                 return events
             self._selector.select = oversleep
 
