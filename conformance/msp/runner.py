@@ -8,7 +8,8 @@ empties the list (INAV clears it only from its CLI, `wp reset`, or MAVLink's
 MISSION_CLEAR_ALL), so a flight controller that held no mission keeps the last one a clause
 wrote, and the restore says so; it is not saved (only MSP.WP.09 saves, and puts back what
 was saved). A clause that meets silence is followed by one MSP_API_VERSION: no answer to it
-either, and the remaining clauses are marked `error` without being run.
+either, and the remaining clauses are marked `error` without being run. A clause that did
+not pass while the host lagged is run again, as the vehicle suite does (host_lag.py).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from ..clause import Clause
 from ..harness.exchange import Exchange
 from ..outcome import ClauseResult, Outcome, TargetUnresponsive
 from ..clause_loop import ClauseLoop
+from ..host_lag import judged_on_time
 from ..runner import DecidedResult, InterruptGuard, OnResult, RunOutcome, _measured, call_check
 from .checks import MSP_CHECKS
 from .session import MspSession
@@ -75,7 +77,7 @@ def run_msp_clauses(session: MspSession, clauses: Iterable[Clause], *, on_result
             if restore:
                 loop.phase = "reading the flight controller's mission"
                 snapshot = session.tester.stored()
-            loop.run(lambda clause: run_one(session, clause), dead_after)
+            loop.run(lambda clause: judged_on_time(session, clause, run_one), dead_after)
         except TargetUnresponsive as exc:     # while reading the mission, before any clause
             loop.give_up(f"the flight controller stopped answering: {exc}")
     dead, interrupted, phase = loop.dead, loop.interrupted, loop.phase

@@ -30,6 +30,8 @@ def build_server(target: MspTarget) -> MspServerNode:
 
 
 class MspSession:
+    clock_speed = 1.0   # a flight controller lives in real time (conformance/host_lag.py reads it)
+
     def __init__(self, target: MspTarget, *, virtual: bool = False, scale: float = 1.0, seed: int = 0,
                  capture: CaptureHook | None = None) -> None:
         self.target = target
@@ -75,6 +77,13 @@ class MspSession:
         msp = {"frames": stats.frames, "garbage_bytes": stats.garbage_bytes, "bad_checksum": stats.bad_checksum,
                "bad_header": stats.bad_header, "oversize": stats.oversize, "truncated": stats.truncated}
         return {**(stream_events(self.stream, self.started) or {}), "msp": msp}
+
+    def take_lag(self) -> float:
+        """The most the driver ran behind its clock since the last call (host_lag.py)."""
+        return self.driver.take_lag()
+
+    def forget_lagged(self, tolerance: float) -> None:
+        """Nothing to forget: no MSP clause shares an observation with another."""
 
     def close(self) -> None:
         close = getattr(self.driver, "close", None)
