@@ -171,9 +171,7 @@ class FrameDecoder:
         if n > 2 and data[0] == MAGIC_V2 and not data[2] & ~IFLAG_SIGNED:
             # The usual UDP datagram: exactly one well-formed MAVLink 2 frame.
             if data[1] + V2_OVERHEAD + (SIGNATURE_LEN if data[2] & IFLAG_SIGNED else 0) == n:
-                if data[2] or self._mav is not self._plain or self._keyring is not None:
-                    return [self._decode_one(data, data[2])]
-                return [self._decode_plain(data)]
+                return [self._decode_one(data, data[2])]
         out: list[Frame | DecodeError] = []
         for start, end, iflags in _pieces(data):
             if iflags.__class__ is str:
@@ -214,38 +212,36 @@ class FrameDecoder:
 
     def _decode_one(self, chunk: bytes, iflags: int) -> Frame | DecodeError:
         signed = bool(iflags & IFLAG_SIGNED)
+        if not signed and self._mav is self._plain:
+            # no key checks an unsigned frame here (none, or a keyring: keys for signed frames
+            # only), so there is no signing state to read or keep: most frames
+            msg = self._pymavlink(self._plain, chunk)
+            if msg.__class__ is DecodeError:
+                return msg
+            self.frames += 1
+            h = msg._header
+            return Frame(msg, chunk, h.srcSystem, h.srcComponent)
         mav, stream_key, saved_ts, stale, no_key = self._signing_context(chunk, signed)
-        # an unknown msgid is refused here, as pymavlink would; the checksum is left to it: it
-        # computes it as it decodes, and a second X.25 here cost every good frame ~40 % more
-        checked = self._check(chunk, iflags, crc=False)
-        if checked.__class__ is str:
-            return self._error(checked, chunk)
+        msg = self._pymavlink(mav, chunk)
+        if msg.__class__ is DecodeError:
+            return msg
+        verdict, fault = self._verdict(mav, chunk, signed, no_key, stream_key, saved_ts, stale, msg._signed)
+        self.frames += 1
+        h = msg._header
+        return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None, fault)
+
+    def _pymavlink(self, mav: Any, chunk: bytes) -> Any:
+        """`mav`'s decode of a framed chunk, or the DecodeError saying why not. pymavlink
+        refuses an unknown msgid (MAVLink_unknown) and a bad checksum before any state of
+        its own changes, so `accepted`'s checks (`_check`) are not repeated here."""
         try:
             msg = mav.decode(bytearray(chunk))
         except Exception as exc:  # pymavlink raises MAVError, struct.error, ValueError...
             return self._error(_reason(exc), chunk)
         if isinstance(msg, self._unknown):
             # pymavlink's MAVLink_unknown carries id -2 in its header; read the id off the wire.
-            msgid = chunk[5] if chunk[0] == MAGIC_V1 else chunk[7] | chunk[8] << 8 | chunk[9] << 16
-            return self._error(f"unknown message id {msgid}", chunk)
-        verdict, fault = self._verdict(mav, chunk, signed, no_key, stream_key, saved_ts, stale, msg._signed)
-        self.frames += 1
-        h = msg._header
-        return Frame(msg, chunk, h.srcSystem, h.srcComponent, verdict, chunk[-13] if signed else None, fault)
-
-    def _decode_plain(self, chunk: bytes) -> Frame | DecodeError:
-        """`_decode_one` for an unsigned MAVLink 2 frame whose length matches its header, with
-        no key anywhere: no signing state to read or keep, and pymavlink refuses an unknown
-        msgid (MAVLink_unknown) and a bad checksum itself. Most frames take this path."""
-        try:
-            msg = self._plain.decode(bytearray(chunk))
-        except Exception as exc:
-            return self._error(_reason(exc), chunk)
-        if isinstance(msg, self._unknown):
-            return self._error(f"unknown message id {chunk[7] | chunk[8] << 8 | chunk[9] << 16}", chunk)
-        self.frames += 1
-        h = msg._header
-        return Frame(msg, chunk, h.srcSystem, h.srcComponent)
+            return self._error(f"unknown message id {_msgid(chunk)}", chunk)
+        return msg
 
     def _signing_context(self, chunk: bytes, signed: bool) -> tuple[Any, Any, int | None, bool, bool]:
         """(pymavlink decoder, stream key, its saved timestamp, stale, no key) for a frame,
@@ -273,19 +269,16 @@ class FrameDecoder:
             stale = ts <= saved_ts if saved_ts is not None else ts + NEW_STREAM_WINDOW < mav.signing.timestamp
         return mav, stream_key, saved_ts, stale, no_key
 
-    def _check(self, chunk: bytes, iflags: int, *, crc: bool = True) -> int | str:
-        """The msgid of a framed chunk (known incompat flags) whose msgid and checksum (unless
-        not `crc`) pass, else why not, as pymavlink's decode says it (it checks them first,
-        before any state of its own changes)."""
-        if chunk[0] == MAGIC_V1:
-            msgid, crc_at = chunk[5], len(chunk) - 2
-        else:
-            msgid = chunk[7] | chunk[8] << 8 | chunk[9] << 16
-            crc_at = len(chunk) - (2 + SIGNATURE_LEN if iflags & IFLAG_SIGNED else 2)
+    def _check(self, chunk: bytes, iflags: int) -> int | str:
+        """The msgid of a framed chunk (known incompat flags) whose msgid and checksum pass,
+        else why not, as pymavlink's decode says it (it checks them first, before any state
+        of its own changes)."""
+        msgid = _msgid(chunk)
+        crc_at = len(chunk) - (2 + SIGNATURE_LEN if iflags & IFLAG_SIGNED else 2)
         cls = self.dialect.mavlink_map.get(msgid)
         if cls is None:
             return f"unknown message id {msgid}"
-        if not crc or self._ignore_crc:
+        if self._ignore_crc:
             return msgid
         got = chunk[crc_at] | chunk[crc_at + 1] << 8
         good = crc16(chunk[1:crc_at], cls.crc_extra)
@@ -359,6 +352,11 @@ def _pieces(data: bytes) -> Iterator[tuple[int, int, int | str]]:
             return
         yield i, i + total, iflags
         i += total
+
+
+def _msgid(chunk: bytes) -> int:
+    """The message id in a frame's header."""
+    return chunk[5] if chunk[0] == MAGIC_V1 else chunk[7] | chunk[8] << 8 | chunk[9] << 16
 
 
 def _next_start(data: bytes, i: int) -> int:
